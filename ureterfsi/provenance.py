@@ -1,0 +1,81 @@
+"""Provenance attributes and atomic file output.
+
+Every file under results/ is written to a temporary sibling and renamed into place, so an interrupted
+or failed job never leaves a partial file where a complete one is expected.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import subprocess
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+def config_hash(cfg: dict) -> str:
+    """SHA-256 (first 16 hex digits) of the canonical JSON form of a configuration."""
+    text = json.dumps(cfg, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def git_commit() -> str:
+    """Commit of the source tree ('+dirty' if it has uncommitted changes), or 'unknown'."""
+    try:
+        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO_ROOT, capture_output=True,
+                             text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO_ROOT,
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return rev + ("+dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def package_versions() -> dict:
+    """Versions of the numerical stack that produced a result."""
+    import importlib
+
+    out = {}
+    for name in ("ureterfsi", "dolfinx", "ufl", "ffcx", "petsc4py", "gmsh", "numpy", "xarray"):
+        try:
+            out[name] = str(importlib.import_module(name).__version__)
+        except Exception:  # a missing optional package is recorded as such
+            out[name] = "not installed"
+    return out
+
+
+def provenance_attrs(cfg: dict, **extra) -> dict:
+    """Flat, netCDF-safe provenance attributes: config hash, git commit, versions, creation time."""
+    attrs = {
+        "config_hash": config_hash(cfg),
+        "git_commit": git_commit(),
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }
+    attrs.update({f"version_{k}": v for k, v in package_versions().items()})
+    attrs.update({k: (v if isinstance(v, (int, float, str)) else json.dumps(v)) for k, v in extra.items()})
+    return attrs
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path next to `path`; rename it onto `path` only if the block succeeds."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix + ".part", dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def write_json(path: str | os.PathLike, data: dict) -> None:
+    """Write `data` as indented JSON, atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(data, indent=2, sort_keys=True, default=float) + "\n")
