@@ -1,0 +1,27 @@
+"""Shared fixtures: the repository root and a fresh, validated copy of the default configuration."""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+
+from ureterfsi.config import load_config
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def repo_root() -> Path:
+    return REPO_ROOT
+
+
+@pytest.fixture(scope="session")
+def _default_cfg() -> dict:
+    return load_config(REPO_ROOT / "config" / "config.yaml")
+
+
+@pytest.fixture
+def cfg(_default_cfg) -> dict:
+    """A deep copy of the validated default config (config/config.yaml); safe to modify."""
+    return copy.deepcopy(_default_cfg)

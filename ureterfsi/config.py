@@ -1,0 +1,438 @@
+"""Validated study configuration (config/config.yaml).
+
+Two layers, both reported as one line ``config error: <dotted.key>: <constraint, with the value>``:
+
+1. JSON Schema (workflow/schemas/config.schema.yaml): keys, types, ranges, enums, no unknown keys.
+   Of several violations the first by dotted key path (sorted) is reported, so the message is
+   deterministic. Optional keys with a schema ``default`` are filled in place (as
+   ``snakemake.utils.validate(..., set_default=True)`` would), so every consumer sees the same keys.
+2. Physical/geometric consistency (``CHECKS`` below, run in order, first failure reported): the
+   cross-key rules the schema cannot express. Each check is a small function naming the key it blames;
+   where a rule involves several keys the message quotes every value entering it.
+
+    python -m ureterfsi.config check config/config.yaml [overlay.yaml ...]
+"""
+from __future__ import annotations
+
+import copy
+import math
+import re
+import sys
+from functools import lru_cache
+from pathlib import Path
+
+import yaml
+
+from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
+DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
+
+RTOL = 1e-9  # relative slack of the floating-point comparisons of exact design ratios (e.g. 0.5/0.125 = 4)
+
+# Bounds of the consistency checks (documented in the messages).
+MIN_GAP_HOLE_DIAMETERS = 2.0     # fluid gap stent-ureter >= 2 hole diameters (a hole jet has room to develop)
+MIN_ELEMENTS = {"hole": ("hole_diameter", 4.0), "stent_wall": ("stent_wall_thickness", 2.0),
+                "ureter_wall": ("ureter_wall_thickness", 2.0)}
+START_WIDTHS = 3.0               # pulse centre may start at most 3 widths upstream of the inlet
+MIN_BULK_RATIO = 10.0            # kappa / (C10 + C01) >= 10: nearly incompressible (paper §2.3.2)
+
+
+class ConfigError(ValueError):
+    """An invalid configuration; ``str`` is one line naming the key and the violated constraint."""
+
+    def __init__(self, key: str, constraint: str):
+        self.key = key
+        self.constraint = " ".join(str(constraint).split())  # one line, whatever went in
+        super().__init__(f"config error: {key}: {self.constraint}")
+
+
+def _fmt(v) -> str:
+    if isinstance(v, bool) or v is None:
+        return repr(v)
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return repr(v)
+
+
+# --------------------------------------------------------------------------------------- schema layer
+
+@lru_cache(maxsize=1)
+def load_schema() -> dict:
+    return yaml.safe_load(SCHEMA_PATH.read_text())
+
+
+def _dotted(parts) -> str:
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "<root>"
+
+
+def _prescan(node, path=()) -> None:
+    """Refuse what JSON Schema cannot see in YAML data: non-string keys and non-finite numbers."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            if not isinstance(k, str):
+                raise ConfigError(_dotted(path + (str(k),)),
+                                  f"keys must be strings, got {type(k).__name__} {k!r} (quote it: \"{k}\")")
+            _prescan(v, path + (k,))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            _prescan(v, path + (i,))
+    elif isinstance(node, float) and not math.isfinite(node):
+        raise ConfigError(_dotted(path), f"must be a finite number, got {node}")
+
+
+def _fill_defaults(node, schema: dict) -> None:
+    """Insert schema defaults of missing optional keys (in place), recursing into present objects."""
+    if not isinstance(node, dict):
+        return
+    for key, sub in schema.get("properties", {}).items():
+        if key not in node and "default" in sub:
+            node[key] = copy.deepcopy(sub["default"])
+        if key in node:
+            _fill_defaults(node[key], sub)
+    for pattern, sub in schema.get("patternProperties", {}).items():
+        for key, value in node.items():
+            if isinstance(key, str) and re.search(pattern, key):
+                _fill_defaults(value, sub)
+
+
+# YAML 1.2 (and JSON) read 5.0e4 as a number; PyYAML, and with it Snakemake's config loader, implement
+# YAML 1.1, whose float syntax needs a dot and a signed exponent, so 5.0e4 arrives as the string '5.0e4'.
+_YAML12_FLOAT = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?")
+
+
+def _resolve(schema: dict, root: dict) -> dict:
+    ref = schema.get("$ref", "")
+    if ref.startswith("#/$defs/"):
+        return {**root["$defs"][ref.split("/")[-1]], **{k: v for k, v in schema.items() if k != "$ref"}}
+    return schema
+
+
+def _coerce_numbers(node, schema: dict, root: dict):
+    """Convert (in place) strings in YAML 1.2 number syntax where the schema expects a number."""
+    schema = _resolve(schema, root)
+    if isinstance(node, dict):
+        subs = schema.get("properties", {})
+        pats = schema.get("patternProperties", {})
+        for k, v in node.items():
+            sub = subs.get(k) or next((ps for p, ps in pats.items() if isinstance(k, str) and re.search(p, k)), None)
+            if sub is not None:
+                node[k] = _coerce_numbers(v, sub, root)
+    elif isinstance(node, list) and isinstance(schema.get("items"), dict):
+        node[:] = [_coerce_numbers(v, schema["items"], root) for v in node]
+    elif isinstance(node, str) and schema.get("type") == "number" and _YAML12_FLOAT.fullmatch(node.strip()):
+        return float(node)
+    return node
+
+
+def _schema_message(err) -> tuple[str, str]:
+    """(dotted key, one-line constraint) of a jsonschema ValidationError."""
+    path = list(err.absolute_path)
+    v, val, inst = err.validator, err.validator_value, err.instance
+    if v == "required":
+        missing = [k for k in val if isinstance(inst, dict) and k not in inst]
+        return _dotted(path + [missing[0]]), "required key is missing"
+    if v == "additionalProperties":
+        props = err.schema.get("properties", {})
+        patterns = list(err.schema.get("patternProperties", {}))
+        extra = sorted(k for k in inst if k not in props and not any(re.search(p, k) for p in patterns))
+        allowed = (f"allowed keys: {', '.join(props)}" if props else
+                   f"keys must match {' or '.join(patterns)}")
+        return _dotted(path + [extra[0]]), f"unknown key (misspelt?); {allowed}"
+    if v == "type":
+        return _dotted(path), f"must be of type {val}, got {type(inst).__name__} {_fmt(inst)}"
+    ops = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}
+    if v in ops:
+        return _dotted(path), f"must be {ops[v]} {_fmt(val)}, got {_fmt(inst)}"
+    if v == "enum":
+        return _dotted(path), f"must be one of {', '.join(map(str, val))}; got {_fmt(inst)}"
+    if v == "multipleOf":
+        return _dotted(path), f"must be a multiple of {_fmt(val)}, got {_fmt(inst)}"
+    if v in ("minItems", "minProperties"):
+        return _dotted(path), f"must have at least {val} entr{'y' if val == 1 else 'ies'}, got {len(inst)}"
+    if v == "minLength":
+        return _dotted(path), f"must be a non-empty string, got {_fmt(inst)}"
+    return _dotted(path), err.message
+
+
+def _validate_schema(cfg: dict) -> None:
+    from jsonschema import Draft202012Validator
+
+    schema = load_schema()
+    errors = [_schema_message(e) for e in Draft202012Validator(schema).iter_errors(cfg)]
+    if errors:
+        key, text = min(errors, key=lambda kt: (kt[0].split("."), kt[1]))
+        raise ConfigError(key, text)
+
+
+# ---------------------------------------------------------------------------- consistency checks
+# Each check takes the schema-valid config and raises ConfigError(key, constraint) on failure.
+
+def _geom(cfg) -> UreterGeometry:
+    return UreterGeometry.from_config(cfg)
+
+
+def check_ureter_wall(cfg):
+    g = cfg["geometry"]
+    ro, t = 0.5 * g["ureter_outer_diameter"], g["ureter_wall_thickness"]
+    if not t < ro:
+        raise ConfigError("geometry.ureter_wall_thickness",
+                          f"must be < the ureter outer radius {_fmt(ro)} m (ureter_outer_diameter/2), got {_fmt(t)}")
+
+
+def check_hole_vs_stent(cfg):
+    g = cfg["geometry"]
+    d, so = g["hole_diameter"], g["stent_inner_diameter"] + 2 * g["stent_wall_thickness"]
+    if not d < so:
+        raise ConfigError("geometry.hole_diameter",
+                          f"must be < the stent outer diameter {_fmt(so)} m, got {_fmt(d)}")
+    # A radial channel of radius a cuts the lumen wall as a simple through-hole only if a < stent inner
+    # radius (geometry.hole_channel_volume assumes it).
+    if not d < g["stent_inner_diameter"]:
+        raise ConfigError("geometry.hole_diameter",
+                          f"must be < the stent inner diameter {_fmt(g['stent_inner_diameter'])} m "
+                          f"(radial through-hole), got {_fmt(d)}")
+
+
+def check_fluid_gap(cfg):
+    geo, g = _geom(cfg), cfg["geometry"]
+    gap = geo.ureter_inner_radius - geo.stent_outer_radius
+    need = MIN_GAP_HOLE_DIAMETERS * g["hole_diameter"]
+    if not gap >= need * (1 - RTOL):
+        raise ConfigError("geometry.stent_wall_thickness",
+                          f"fluid gap between stent outer radius {_fmt(geo.stent_outer_radius)} m "
+                          f"(stent_inner_diameter/2 + stent_wall_thickness) and ureter inner radius "
+                          f"{_fmt(geo.ureter_inner_radius)} m is {_fmt(gap)} m; need >= "
+                          f"{_fmt(MIN_GAP_HOLE_DIAMETERS)} hole diameters = {_fmt(need)} m")
+
+
+def check_hole_end_clearance(cfg):
+    g = cfg["geometry"]
+    c, r, L = g["hole_end_clearance"], 0.5 * g["hole_diameter"], g["length"]
+    if not c > r:
+        raise ConfigError("geometry.hole_end_clearance",
+                          f"must be > the hole radius {_fmt(r)} m so every hole lies wholly inside the stent, "
+                          f"got {_fmt(c)}")
+    if not g["hole_diameter"] < L - 2 * c:
+        raise ConfigError("geometry.hole_end_clearance",
+                          f"the hole positions are clipped to [c, L - c] = [{_fmt(c)}, {_fmt(L - c)}] m; "
+                          f"this span must exceed the hole diameter {_fmt(g['hole_diameter'])} m, got c = {_fmt(c)}")
+
+
+def check_model_keys(cfg):
+    keys = sorted(cfg["models"], key=int)
+    want = [str(i) for i in range(1, len(keys) + 1)]
+    if keys != want:
+        raise ConfigError("models", f"model keys must be \"1\"..\"{len(keys)}\" without gaps, got {keys}")
+
+
+def check_models(cfg):
+    L, geo = cfg["geometry"]["length"], _geom(cfg)
+    d = cfg["geometry"]["hole_diameter"]
+    for name in sorted(cfg["models"], key=int):
+        m, key = cfg["models"][name], f"models.{name}"
+        s, holes = m["hole_pair_spacing"], m["holes"]
+        if not m["stent"]:
+            if holes != 0:
+                raise ConfigError(f"{key}.holes", f"must be 0 for a model without a stent (stent: false), got {holes}")
+            if s != 0:
+                raise ConfigError(f"{key}.hole_pair_spacing",
+                                  f"must be 0 for a model without a stent (stent: false), got {_fmt(s)}")
+            continue
+        if s <= 0:
+            raise ConfigError(f"{key}.hole_pair_spacing", f"must be > 0 for a stented model (stent: true), got {_fmt(s)}")
+        if holes <= 0 or holes % 2:
+            raise ConfigError(f"{key}.holes",
+                              f"must be a positive even number (holes come in radial pairs) for a stented model, "
+                              f"got {holes}")
+        n = math.floor(L / s + 1e-9) + 1
+        if holes // 2 != n:
+            raise ConfigError(f"{key}.holes",
+                              f"{holes} holes = {holes // 2} pairs, but spacing {_fmt(s)} m over length {_fmt(L)} m "
+                              f"gives floor(L/s) + 1 = {n} pairs ({2 * n} holes): n pairs at spacing s span the "
+                              f"segment end to end, (n-1)s <= L (Table 1)")
+        z = hole_pair_positions(geo, StentModel.from_config(cfg, name))
+        dz = z[1:] - z[:-1]
+        if dz.size and not dz.min() > d:
+            i = int(dz.argmin())
+            raise ConfigError(f"{key}.hole_pair_spacing",
+                              f"hole pairs at z = {_fmt(float(z[i]))} and {_fmt(float(z[i + 1]))} m overlap: "
+                              f"distance {_fmt(float(dz[i]))} m must be > hole_diameter {_fmt(d)} m "
+                              f"(positions clip(k*s, c, L-c), spacing {_fmt(s)} m)")
+
+
+def check_time(cfg):
+    t = cfg["time"]
+    end, dt, probes = t["end"], t["dt"], t["probe_times"]
+    if not dt < end:
+        raise ConfigError("time.dt", f"must be < time.end = {_fmt(end)} s, got {_fmt(dt)}")
+    for i, p in enumerate(probes):
+        if not 0 < p <= end * (1 + RTOL):
+            raise ConfigError(f"time.probe_times[{i}]", f"must lie in (0, time.end = {_fmt(end)}] s, got {_fmt(p)}")
+    for i in range(1, len(probes)):
+        if not probes[i] > probes[i - 1]:
+            raise ConfigError(f"time.probe_times[{i}]",
+                              f"probe times must be strictly increasing, got {_fmt(probes[i])} after "
+                              f"{_fmt(probes[i - 1])}")
+    gaps = [b - a for a, b in zip([0.0] + list(probes), probes)]
+    if not dt <= min(gaps) * (1 + RTOL):
+        raise ConfigError("time.dt",
+                          f"must be <= the smallest spacing of the probe times (from t = 0) {_fmt(min(gaps))} s, "
+                          f"got {_fmt(dt)}")
+    ramp = cfg["peristalsis"]["ramp_time"]
+    if not ramp < end:
+        raise ConfigError("peristalsis.ramp_time", f"must be < time.end = {_fmt(end)} s, got {_fmt(ramp)}")
+
+
+def check_mesh_sizes(cfg):
+    sizes = cfg["mesh"]["sizes"]
+    order = ["hole", "stent_wall", "ureter_wall", "fluid_bulk"]
+    for a, b in zip(order, order[1:]):
+        if not sizes[a] <= sizes[b]:
+            raise ConfigError(f"mesh.sizes.{b}",
+                              f"must be >= mesh.sizes.{a} = {_fmt(sizes[a])} m (hole <= stent_wall <= ureter_wall "
+                              f"<= fluid_bulk), got {_fmt(sizes[b])}")
+
+
+def check_levels(cfg):
+    levels = cfg["mesh"]["levels"]
+    prev = None
+    for name, lv in levels.items():
+        f = lv["size_factor"]
+        if prev is not None and not f < prev[1]:
+            raise ConfigError(f"mesh.levels.{name}.size_factor",
+                              f"must be < the size_factor {_fmt(prev[1])} of the preceding level '{prev[0]}' "
+                              f"(levels are listed coarse to fine), got {_fmt(f)}")
+        prev = (name, f)
+
+
+def check_resolution(cfg):
+    g, sizes = cfg["geometry"], cfg["mesh"]["sizes"]
+    for name, lv in cfg["mesh"]["levels"].items():
+        f = lv["size_factor"]
+        for size_key, (geo_key, need) in MIN_ELEMENTS.items():
+            n = g[geo_key] / (sizes[size_key] * f)
+            if not n >= need * (1 - RTOL):
+                raise ConfigError(f"mesh.sizes.{size_key}",
+                                  f"at level '{name}' (size_factor {_fmt(f)}) geometry.{geo_key} / "
+                                  f"(mesh.sizes.{size_key} * size_factor) = {_fmt(g[geo_key])} / "
+                                  f"({_fmt(sizes[size_key])} * {_fmt(f)}) = {n:.3g} elements; need >= {_fmt(need)}")
+
+
+def check_symmetry(cfg):
+    if cfg["mesh"]["symmetry"] == "axisymmetric":
+        stented = [n for n in sorted(cfg["models"], key=int) if cfg["models"][n]["stent"]]
+        if stented:
+            raise ConfigError("mesh.symmetry",
+                              f"'axisymmetric' is study-wide and only valid if no model has a stent (side holes "
+                              f"break rotational symmetry); stented models: {', '.join(stented)}")
+
+
+def check_peristalsis(cfg):
+    p, L = cfg["peristalsis"], cfg["geometry"]["length"]
+    lo = -START_WIDTHS * p["width"]
+    if not lo <= p["start_position"] <= L:
+        raise ConfigError("peristalsis.start_position",
+                          f"must lie in [-{_fmt(START_WIDTHS)} widths, L] = [{_fmt(lo)}, {_fmt(L)}] m, "
+                          f"got {_fmt(p['start_position'])}")
+
+
+def check_ureter_material(cfg):
+    u = cfg["ureter"]
+    mu0 = 2 * (u["c10"] + u["c01"])
+    if not mu0 > 0:
+        raise ConfigError("ureter.c10",
+                          f"Mooney-Rivlin initial shear modulus 2(c10 + c01) must be > 0, got 2({_fmt(u['c10'])} + "
+                          f"{_fmt(u['c01'])}) = {_fmt(mu0)} Pa")
+    ratio = u["bulk_modulus"] / (u["c10"] + u["c01"])
+    if not ratio >= MIN_BULK_RATIO:
+        raise ConfigError("ureter.bulk_modulus",
+                          f"must be >= {_fmt(MIN_BULK_RATIO)} (c10 + c01) for near-incompressibility (paper §2.3.2), "
+                          f"got {_fmt(u['bulk_modulus'])} Pa = {ratio:.3g} (c10 + c01)")
+
+
+CHECKS = (
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
+    check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
+    check_symmetry, check_peristalsis, check_ureter_material,
+)
+
+
+# ------------------------------------------------------------------------------------------- API
+
+def validate_config(cfg: dict) -> None:
+    """Validate `cfg` (schema, then CHECKS); raise ConfigError on the first violation.
+
+    Normalises `cfg` in place first: strings in YAML 1.2 number syntax where the schema expects a number
+    become floats (PyYAML/Snakemake read ``5.0e4`` as a string, see _YAML12_FLOAT), and missing optional
+    keys get their schema defaults.
+    """
+    if not isinstance(cfg, dict):
+        raise ConfigError("<root>", f"must be a mapping, got {type(cfg).__name__}")
+    _prescan(cfg)
+    _coerce_numbers(cfg, load_schema(), load_schema())
+    _fill_defaults(cfg, load_schema())
+    _validate_schema(cfg)
+    for check in CHECKS:
+        check(cfg)
+
+
+def deep_merge(base: dict, overrides: dict) -> dict:
+    """Return `base` updated recursively by `overrides` (nested dicts merged, other values replaced)."""
+    out = copy.deepcopy(base)
+    for k, v in (overrides or {}).items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = deep_merge(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def _read_yaml(path) -> dict:
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(str(path), f"cannot read YAML: {exc}") from None
+    return {} if data is None else data
+
+
+def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> dict:
+    """Read a YAML file (or copy a dict), deep-merge `overrides`, validate and return the config."""
+    base = copy.deepcopy(path_or_dict) if isinstance(path_or_dict, dict) else _read_yaml(path_or_dict)
+    if not isinstance(base, dict):
+        raise ConfigError("<root>", f"must be a mapping, got {type(base).__name__}")
+    cfg = deep_merge(base, overrides) if overrides else base
+    validate_config(cfg)
+    return cfg
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) < 2 or argv[0] != "check":
+        sys.stderr.write("usage: python -m ureterfsi.config check <config.yaml> [<overlay.yaml> ...]\n")
+        return 2
+    from ureterfsi.provenance import config_hash
+
+    try:
+        cfg = _read_yaml(argv[1])
+        for overlay in argv[2:]:
+            extra = _read_yaml(overlay)
+            if not isinstance(extra, dict) or not isinstance(cfg, dict):
+                raise ConfigError(overlay, "overlay and configuration must be mappings")
+            cfg = deep_merge(cfg, extra)
+        cfg = load_config(cfg)
+    except ConfigError as err:
+        sys.stderr.write(f"{err}\n")
+        return 2
+    print(f"config ok: {config_hash(cfg)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
