@@ -43,6 +43,7 @@ BAD = [
     ("ureter.design_tolerance", 1.0, "ureter.design_tolerance", "must be < 1"),
     ("ureter.design_tolerance", 0.0, "ureter.design_tolerance", "must be > 0"),
     ("fluid.dynamic_viscosity", float("nan"), "fluid.dynamic_viscosity", "finite"),
+    ("fluid.density", "1.0e999", "fluid.density", "finite"),
     ("geometry.lenght", 0.05, "geometry.lenght", "unknown key"),
     ("solvers", {}, "solvers", "unknown key"),
     ("models.x", MODEL4, "models.x", "unknown key"),

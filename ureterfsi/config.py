@@ -375,8 +375,8 @@ def validate_config(cfg: dict) -> None:
     """
     if not isinstance(cfg, dict):
         raise ConfigError("<root>", f"must be a mapping, got {type(cfg).__name__}")
-    _prescan(cfg)
     _coerce_numbers(cfg, load_schema(), load_schema())
+    _prescan(cfg)
     _fill_defaults(cfg, load_schema())
     _validate_schema(cfg)
     for check in CHECKS:
