@@ -1,0 +1,393 @@
+"""Monolithic ALE fluid-structure problem: one Newton system per time step on a conforming mesh.
+
+Fields on the whole mesh (mixed element): velocity v (P2; fluid velocity in the fluid, solid
+velocity in the solids), displacement u (P2; solid displacement in the solids, ALE mesh
+displacement in the fluid), fluid pressure p (P1; only if the scene has a fluid) and solid pressure
+pi (P0; only if it has a Mooney-Rivlin solid). Velocity continuity and traction balance at every
+fluid-solid interface follow from the conforming continuous v and u (paper eqs. 22-25).
+
+Rows that belong to no physics are pinned: pressure dofs owned only by solid cells, solid-pressure
+dofs outside the Mooney-Rivlin cells. The mesh-motion rows of interface displacement dofs are removed,
+so the interface moves exactly with the solid kinematics (no mesh-motion pollution).
+Time: BDF2 with variable step (Backward Euler for the first step); steady mode switches d/dt off.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import physics
+from .materials import LinearElastic, MooneyRivlin
+from .operators import Operators
+from .scene import Scene
+
+log = logging.getLogger("ureterfsi.fsi")
+
+FIELDS = ("velocity", "displacement", "pressure", "solid_pressure")
+
+
+@dataclass
+class SolverOptions:
+    velocity_degree: int = 2
+    pressure_degree: int = 1
+    quadrature_degree: int = 4
+    mesh_motion: str = "harmonic"       # harmonic | elastic
+    mesh_stiffening: float = 1.0        # exponent q of (V_mean / V_cell)^q
+    newton_rtol: float = 1e-8           # residual reduction relative to the step's first residual
+    newton_atol: float = 1e-10          # absolute residual norm
+    newton_stol: float = 1e-11          # relative Newton increment ||dx|| / ||x||
+    newton_max_iterations: int = 15
+    reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
+    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
+    linear_solver: str = "mumps"
+
+
+class NewtonDivergence(RuntimeError):
+    """Newton failed to converge (or produced a non-finite residual) in one step."""
+
+    def __init__(self, message, history):
+        super().__init__(message)
+        self.history = history
+
+
+class MonolithicFSI:
+    def __init__(self, scene: Scene, options: SolverOptions | None = None):
+        self.scene = scene
+        self.options = opts = options or SolverOptions()
+        mesh = scene.mesh
+        self.mesh = mesh
+        self.comm = mesh.comm
+        self.ops = ops = Operators(mesh, scene.axisymmetric)
+        tdim = mesh.topology.dim
+        cell = mesh.ufl_cell()
+
+        fluid_tags = tuple(scene.fluid.tags) if scene.fluid else ()
+        mr_tags = tuple(t for s in scene.solids if isinstance(s.material, MooneyRivlin) for t in s.tags)
+        solid_tags = tuple(t for s in scene.solids for t in s.tags)
+        self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
+
+        # --- mixed space --------------------------------------------------------------------
+        elements = {"velocity": ufl.VectorElement("Lagrange", cell, opts.velocity_degree),
+                    "displacement": ufl.VectorElement("Lagrange", cell, opts.velocity_degree)}
+        if fluid_tags:
+            elements["pressure"] = ufl.FiniteElement("Lagrange", cell, opts.pressure_degree)
+        if mr_tags:
+            elements["solid_pressure"] = ufl.FiniteElement("DG", cell, 0)
+        self.field_names = list(elements)
+        self.W = W = fem.FunctionSpace(mesh, ufl.MixedElement(list(elements.values())))
+        self.index = {name: i for i, name in enumerate(self.field_names)}
+
+        self.x = fem.Function(W, name="state")
+        self.x_n = fem.Function(W)
+        self.x_nm1 = fem.Function(W)
+        self.t = fem.Constant(mesh, 0.0)
+        self.dt = fem.Constant(mesh, 1.0)
+        self.bdf = [fem.Constant(mesh, 0.0) for _ in range(3)]   # d/dt a = (b0 a + b1 a_n + b2 a_nm1)/dt
+        self.time = 0.0
+        self.dt_prev = None
+
+        def parts(f):
+            s = ufl.split(f)
+            return {name: s[i] for i, name in enumerate(self.field_names)}
+
+        X, Xn, Xnm1 = parts(self.x), parts(self.x_n), parts(self.x_nm1)
+        tests = parts(ufl.TestFunction(W))
+        v, u = X["velocity"], X["displacement"]
+        phi, psi = tests["velocity"], tests["displacement"]
+
+        def ddt(name):
+            b0, b1, b2 = self.bdf
+            return (b0 * X[name] + b1 * Xn[name] + b2 * Xnm1[name]) / self.dt
+
+        dvdt, dudt = ddt("velocity"), ddt("displacement")
+        self._dudt = dudt
+        md = {"quadrature_degree": opts.quadrature_degree}
+        self.dx = dx = ufl.Measure("dx", domain=mesh, subdomain_data=scene.cell_tags, metadata=md)
+        self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
+
+        # --- residual -----------------------------------------------------------------------
+        R = 0
+        if fluid_tags:
+            fl = scene.fluid.material
+            R += physics.fluid_ale_residual(ops, fl, v, X["pressure"], u, dvdt, dudt, phi,
+                                            tests["pressure"], dx(fluid_tags))
+            for ob in scene.open_boundaries:
+                R += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt,
+                                                    phi, ds(tuple(ob.tags)))
+        for solid in scene.solids:
+            mat, dxs = solid.material, dx(tuple(solid.tags))
+            R += physics.solid_inertia_residual(ops, mat.density, dvdt, phi, dxs)
+            R += physics.kinematic_residual(ops, dudt, v, psi, dxs)
+            if isinstance(mat, MooneyRivlin):
+                R += physics.mooney_rivlin_residual(ops, mat, u, X["solid_pressure"], phi,
+                                                    tests["solid_pressure"], dxs)
+            elif isinstance(mat, LinearElastic):
+                R += physics.elastic_residual(ops, mat, u, phi, dxs)
+            else:
+                raise TypeError(f"unsupported solid material {type(mat).__name__}")
+        X_ref = ufl.SpatialCoordinate(mesh)
+        for load in scene.loads:
+            R += physics.surface_load_residual(ops, load.traction(X_ref, self.t, ops.normal()), phi,
+                                               ds(tuple(load.tags)))
+        self.residual_form = fem.form(R)
+        self.jacobian_form = fem.form(ufl.derivative(R, self.x))
+
+        self.mesh_form = self.mesh_jacobian_form = None
+        if fluid_tags:
+            self.stiffness = self._cell_stiffness(fluid_tags)
+            Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags))
+            self.mesh_form = fem.form(Rm)
+            self.mesh_jacobian_form = fem.form(ufl.derivative(Rm, self.x))
+
+        # --- constraints --------------------------------------------------------------------
+        self._build_dirichlet()
+        self._build_pins_and_interface(fluid_tags, solid_tags, mr_tags)
+        self.bcs = self.dirichlet_bcs + self.pin_bcs
+
+        # --- algebra ------------------------------------------------------------------------
+        self.A = fem_petsc.create_matrix(self.jacobian_form)
+        self.b = fem_petsc.create_vector(self.residual_form)
+        if self.mesh_form is not None:
+            self.Am = fem_petsc.create_matrix(self.mesh_jacobian_form)
+            self.bm = fem_petsc.create_vector(self.mesh_form)
+        self.dx_vec = self.x.vector.duplicate()
+        self.ksp = PETSc.KSP().create(self.comm)
+        self.ksp.setOperators(self.A)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType(opts.linear_solver)
+        self._jacobian_valid = False
+        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise_solve": 0.0}
+        self.min_jacobian_expr = None
+        if fluid_tags:
+            self._setup_ale_jacobian(u, fluid_tags)
+
+    # ---------------------------------------------------------------------------------------
+    def sub(self, name):
+        return self.W.sub(self.index[name])
+
+    def field(self, name, which=None):
+        """Collapsed copy of a field of the current (or given) state."""
+        f = (which or self.x).sub(self.index[name]).collapse()
+        f.name = name
+        return f
+
+    def _cells(self, tags):
+        ct = self.scene.cell_tags
+        return np.unique(np.concatenate([ct.find(t) for t in tags] or [np.zeros(0, np.int32)])).astype(np.int32)
+
+    def _cell_stiffness(self, fluid_tags):
+        """k = (V_mean / V_cell)^q on fluid cells: small cells near interfaces resist distortion."""
+        Q = fem.FunctionSpace(self.mesh, ("DG", 0))
+        vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=self.mesh)))
+        vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        k = fem.Function(Q, name="mesh_stiffness")
+        nloc = Q.dofmap.index_map.size_local
+        cells = self._cells(fluid_tags)
+        cells = cells[cells < nloc]
+        local = vol.array[cells]
+        total = self.comm.allreduce(local.sum(), MPI.SUM)
+        count = self.comm.allreduce(local.size, MPI.SUM)
+        vmean = total / max(count, 1)
+        k.x.array[:] = 1.0
+        k.x.array[cells] = (vmean / local) ** self.options.mesh_stiffening
+        k.x.scatter_forward()
+        return k
+
+    def _build_dirichlet(self):
+        """Scene Dirichlet conditions; time-dependent values are re-interpolated in `_update_bcs`."""
+        fdim = self.mesh.topology.dim - 1
+        ft = self.scene.facet_tags
+        self.dirichlet_bcs, self._bc_updates = [], []
+        for cond in self.scene.dirichlet:
+            facets = np.unique(np.concatenate([ft.find(t) for t in cond.tags])).astype(np.int32)
+            base = self.sub(cond.field)
+            comps = [None] if cond.components is None else list(cond.components)
+            for c in comps:
+                space = base if c is None else base.sub(c)
+                collapsed, _ = space.collapse()
+                dofs = fem.locate_dofs_topological((space, collapsed), fdim, facets)
+                g = fem.Function(collapsed)
+                self.dirichlet_bcs.append(fem.dirichletbc(g, dofs, space))
+                if cond.value is not None:
+                    self._bc_updates.append((g, cond.value, c))
+
+    def _update_bcs(self, t):
+        for g, value, comp in self._bc_updates:
+            if comp is None:
+                g.interpolate(lambda x: value(x, t))
+            else:
+                g.interpolate(lambda x: np.asarray(value(x, t)).reshape(-1))
+
+    def _build_pins_and_interface(self, fluid_tags, solid_tags, mr_tags):
+        tdim = self.mesh.topology.dim
+        zero = PETSc.ScalarType(0.0)
+        self.pin_bcs = []
+        fluid_cells, solid_cells = self._cells(fluid_tags), self._cells(solid_tags)
+        if "pressure" in self.index and solid_tags:
+            P = self.sub("pressure")
+            in_fluid = fem.locate_dofs_topological(P, tdim, fluid_cells)
+            in_solid = fem.locate_dofs_topological(P, tdim, solid_cells)
+            pinned = np.setdiff1d(in_solid, in_fluid).astype(np.int32)
+            self.pin_bcs.append(fem.dirichletbc(zero, pinned, P))
+        if "solid_pressure" in self.index:
+            others = self._cells(tuple(t for t in fluid_tags + solid_tags if t not in mr_tags))
+            Q = self.sub("solid_pressure")
+            self.pin_bcs.append(fem.dirichletbc(zero, fem.locate_dofs_topological(Q, tdim, others), Q))
+        # mesh-motion rows removed at interface displacement dofs (and at Dirichlet rows)
+        U = self.sub("displacement")
+        if fluid_tags and solid_tags:
+            interface = np.intersect1d(fem.locate_dofs_topological(U, tdim, fluid_cells),
+                                       fem.locate_dofs_topological(U, tdim, solid_cells))
+        else:
+            interface = np.zeros(0, np.int32)
+        bs = self.W.dofmap.index_map_bs
+        nloc = self.W.dofmap.index_map.size_local * bs
+        rows = np.unique(np.concatenate([interface] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs]))
+        rows = rows[rows < nloc]
+        offset = self.W.dofmap.index_map.local_range[0] * bs
+        self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
+        self._mesh_excluded_local = rows.astype(np.int32)
+
+    def _setup_ale_jacobian(self, u, fluid_tags):
+        """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
+        Q = fem.FunctionSpace(self.mesh, ("DG", 1))
+        self._jac_fn = fem.Function(Q)
+        self.min_jacobian_expr = fem.Expression(ufl.det(physics.deformation_gradient(self.ops, u)),
+                                                Q.element.interpolation_points())
+        cells = self._cells(fluid_tags)
+        cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
+        self._jac_dofs = np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[cells].ravel())
+
+    def min_ale_jacobian(self) -> float:
+        """Minimum det(I + Grad u) over the fluid mesh (1 when undeformed, <= 0 when inverted)."""
+        if self.min_jacobian_expr is None:
+            return 1.0
+        self._jac_fn.interpolate(self.min_jacobian_expr)
+        local = self._jac_fn.x.array[self._jac_dofs].min() if self._jac_dofs.size else np.inf
+        return float(self.comm.allreduce(local, MPI.MIN))
+
+    # ---------------------------------------------------------------------------------------
+    def _assemble_residual(self):
+        t0 = _time.perf_counter()
+        b = self.b
+        with b.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.assemble_vector(b, self.residual_form)
+        if self.mesh_form is not None:
+            bm = self.bm
+            with bm.localForm() as loc:
+                loc.set(0.0)
+            fem_petsc.assemble_vector(bm, self.mesh_form)
+            bm.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            bm.array_w[self._mesh_excluded_local] = 0.0
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.mesh_form is not None:
+            b.axpy(1.0, bm)
+        fem_petsc.set_bc(b, self.bcs, self.x.vector, -1.0)
+        self.timings["assemble_residual"] += _time.perf_counter() - t0
+        return b.norm()
+
+    def _assemble_jacobian(self):
+        t0 = _time.perf_counter()
+        A = self.A
+        A.zeroEntries()
+        fem_petsc.assemble_matrix(A, self.jacobian_form, bcs=self.bcs)
+        A.assemble()
+        if self.mesh_jacobian_form is not None:
+            Am = self.Am
+            Am.zeroEntries()
+            fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
+            Am.assemble()
+            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            A.axpy(1.0, Am, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self._jacobian_valid = True
+        self.timings["assemble_jacobian"] += _time.perf_counter() - t0
+
+    def newton(self):
+        """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
+        o = self.options
+        history = []
+        fem_petsc.set_bc(self.x.vector, self.bcs)
+        self.x.x.scatter_forward()
+        r0 = None
+        for it in range(o.newton_max_iterations + 1):
+            r = self._assemble_residual()
+            history.append(r)
+            if not math.isfinite(r):
+                raise NewtonDivergence(f"non-finite residual at Newton iteration {it}", history)
+            r0 = r if r0 is None else r0
+            if r <= o.newton_atol or (it > 0 and r <= o.newton_rtol * r0):
+                return it, history
+            if it == o.newton_max_iterations:
+                break
+            contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
+            if not (o.reuse_jacobian and self._jacobian_valid and contraction < o.reuse_contraction):
+                self._assemble_jacobian()
+                self.ksp.setOperators(self.A)
+            t0 = _time.perf_counter()
+            self.ksp.solve(self.b, self.dx_vec)
+            self.timings["factorise_solve"] += _time.perf_counter() - t0
+            self.x.vector.axpy(-1.0, self.dx_vec)
+            self.x.x.scatter_forward()
+            if self.dx_vec.norm() <= o.newton_stol * max(self.x.vector.norm(), 1e-300):
+                r = self._assemble_residual()
+                history.append(r)
+                if math.isfinite(r):
+                    return it + 1, history
+        raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} Newton iterations", history)
+
+    # ---------------------------------------------------------------------------------------
+    def set_bdf(self, dt):
+        """Variable-step BDF2 coefficients (Backward Euler when there is no previous step)."""
+        if self.dt_prev is None:
+            c = (1.0, -1.0, 0.0)
+        else:
+            w = dt / self.dt_prev
+            c = ((1.0 + 2.0 * w) / (1.0 + w), -(1.0 + w), w * w / (1.0 + w))
+        for const, val in zip(self.bdf, c):
+            const.value = val
+        self.dt.value = dt
+
+    def step(self, dt):
+        """Advance from self.time by dt. On failure the state is restored and NewtonDivergence raised."""
+        self.set_bdf(dt)
+        t_new = self.time + dt
+        self.t.value = t_new
+        self._update_bcs(t_new)
+        self.x.x.array[:] = self.x_n.x.array      # predictor: previous state
+        try:
+            its, history = self.newton()
+        except NewtonDivergence:
+            self.x.x.array[:] = self.x_n.x.array
+            self.t.value = self.time
+            self._jacobian_valid = False
+            raise
+        self.x_nm1.x.array[:] = self.x_n.x.array
+        self.x_n.x.array[:] = self.x.x.array
+        self.dt_prev, self.time = dt, t_new
+        return its, history
+
+    def solve_steady(self, t=None):
+        """Steady state (d/dt switched off) at time t: e.g. fluid at rest under the reference pressure,
+        or a steady FSI benchmark. The result becomes the initial state of a transient run."""
+        if t is not None:
+            self.time = t
+        for const in self.bdf:
+            const.value = 0.0
+        self.t.value = self.time
+        self._update_bcs(self.time)
+        its, history = self.newton()
+        self.x_n.x.array[:] = self.x.x.array
+        self.x_nm1.x.array[:] = self.x.x.array
+        return its, history

@@ -1,0 +1,76 @@
+"""A scene: everything the engine needs to know about one problem, as plain data.
+
+The engine knows nothing about ureters. A scene supplies a tagged mesh, the material of each tagged
+region, the open boundaries, the surface loads and the Dirichlet conditions. Time-dependent data are
+callables of (x, t) (interpolated each step) or of (X, t, N) returning UFL (evaluated in the forms).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
+
+
+@dataclass
+class FluidRegion:
+    tags: Sequence[int]
+    material: NewtonianFluid
+
+
+@dataclass
+class SolidRegion:
+    tags: Sequence[int]
+    material: MooneyRivlin | LinearElastic
+
+
+@dataclass
+class OpenBoundary:
+    """Fluid boundary with prescribed normal stress sigma n = -normal_stress n (paper eq. 5),
+    with optional directional backflow stabilisation of strength `backflow` (0 disables)."""
+    tags: Sequence[int]
+    normal_stress: float = 0.0
+    backflow: float = 1.0
+
+
+@dataclass
+class SurfaceLoad:
+    """Traction per reference area on tagged facets: P N = traction(X, t, N), a UFL vector
+    (X reference coordinates, t a UFL constant time, N reference outward normal; 3-vectors in
+    axisymmetric scenes, components (r, theta, z))."""
+    tags: Sequence[int]
+    traction: Callable
+
+
+@dataclass
+class DirichletCondition:
+    """Prescribed velocity (field 'velocity') or displacement (field 'displacement') on tagged facets.
+
+    value(x, t) -> array (gdim, n) for all components, or (n,) for a single component;
+    None means zero. components=None constrains the whole vector, else only the listed components
+    (e.g. symmetry planes: the normal component)."""
+    field: str
+    tags: Sequence[int]
+    value: Optional[Callable] = None
+    components: Optional[Sequence[int]] = None
+
+
+@dataclass
+class Scene:
+    mesh: object
+    cell_tags: object
+    facet_tags: object
+    fluid: Optional[FluidRegion] = None
+    solids: list = field(default_factory=list)
+    open_boundaries: list = field(default_factory=list)
+    loads: list = field(default_factory=list)
+    dirichlet: list = field(default_factory=list)
+    axisymmetric: bool = False
+    name: str = "scene"
+
+    def __post_init__(self):
+        if self.fluid is None and not self.solids:
+            raise ValueError("a scene needs a fluid region, a solid region, or both")
+        for bc in self.dirichlet:
+            if bc.field not in ("velocity", "displacement"):
+                raise ValueError(f"DirichletCondition.field must be 'velocity' or 'displacement', got {bc.field!r}")
