@@ -412,6 +412,17 @@ def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> d
     return cfg
 
 
+def load_config_files(paths) -> dict:
+    """Load a configuration file with overlay files deep-merged on top, in order, and validate."""
+    cfg = _read_yaml(paths[0])
+    for overlay in paths[1:]:
+        extra = _read_yaml(overlay)
+        if not isinstance(extra, dict) or not isinstance(cfg, dict):
+            raise ConfigError(str(overlay), "overlay and configuration must be mappings")
+        cfg = deep_merge(cfg, extra)
+    return load_config(cfg)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) < 2 or argv[0] != "check":
@@ -420,13 +431,7 @@ def main(argv: list[str] | None = None) -> int:
     from ureterfsi.provenance import config_hash
 
     try:
-        cfg = _read_yaml(argv[1])
-        for overlay in argv[2:]:
-            extra = _read_yaml(overlay)
-            if not isinstance(extra, dict) or not isinstance(cfg, dict):
-                raise ConfigError(overlay, "overlay and configuration must be mappings")
-            cfg = deep_merge(cfg, extra)
-        cfg = load_config(cfg)
+        cfg = load_config_files(argv[1:])
     except ConfigError as err:
         sys.stderr.write(f"{err}\n")
         return 2

@@ -89,9 +89,12 @@ class TimeIntegrator:
                          meta=np.array(json.dumps(meta)))
         log.info("checkpoint: step %d t=%.6g s -> %s", step, pb.time, self._checkpoint_file())
 
+    def has_checkpoint(self) -> bool:
+        return bool(self.settings.checkpoint_path) and self._checkpoint_file().exists()
+
     def load_checkpoint(self):
         """Restore the last checkpoint if one exists. Returns (step, dt_next) or None."""
-        if not self.settings.checkpoint_path or not self._checkpoint_file().exists():
+        if not self.has_checkpoint():
             return None
         pb = self.problem
         data = np.load(self._checkpoint_file())

@@ -89,18 +89,15 @@ class MonolithicFSI:
         self.x = fem.Function(W, name="state")
         self.x_n = fem.Function(W)
         self.x_nm1 = fem.Function(W)
+        self.x_dot = fem.Function(W, name="time_derivative")   # BDF d/dt of the last accepted step
         self.t = fem.Constant(mesh, 0.0)
         self.dt = fem.Constant(mesh, 1.0)
         self.bdf = [fem.Constant(mesh, 0.0) for _ in range(3)]   # d/dt a = (b0 a + b1 a_n + b2 a_nm1)/dt
         self.time = 0.0
         self.dt_prev = None
 
-        def parts(f):
-            s = ufl.split(f)
-            return {name: s[i] for i, name in enumerate(self.field_names)}
-
-        X, Xn, Xnm1 = parts(self.x), parts(self.x_n), parts(self.x_nm1)
-        tests = parts(ufl.TestFunction(W))
+        X, Xn, Xnm1 = self.split(self.x), self.split(self.x_n), self.split(self.x_nm1)
+        tests = self.split(ufl.TestFunction(W))
         v, u = X["velocity"], X["displacement"]
         phi, psi = tests["velocity"], tests["displacement"]
 
@@ -175,6 +172,11 @@ class MonolithicFSI:
     # ---------------------------------------------------------------------------------------
     def sub(self, name):
         return self.W.sub(self.index[name])
+
+    def split(self, which=None):
+        """UFL parts {field name: expression} of the current state (or of `which`, e.g. x_dot)."""
+        parts = ufl.split(which or self.x)
+        return {name: parts[i] for i, name in enumerate(self.field_names)}
 
     def field(self, name, which=None):
         """Collapsed copy of a field of the current (or given) state."""
@@ -373,6 +375,8 @@ class MonolithicFSI:
             self.t.value = self.time
             self._jacobian_valid = False
             raise
+        b0, b1, b2 = (c.value for c in self.bdf)
+        self.x_dot.x.array[:] = (b0 * self.x.x.array + b1 * self.x_n.x.array + b2 * self.x_nm1.x.array) / dt
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
         self.dt_prev, self.time = dt, t_new
@@ -390,4 +394,5 @@ class MonolithicFSI:
         its, history = self.newton()
         self.x_n.x.array[:] = self.x.x.array
         self.x_nm1.x.array[:] = self.x.x.array
+        self.x_dot.x.array[:] = 0.0
         return its, history

@@ -1,0 +1,357 @@
+"""One run of the ureter study: mesh + configuration -> fully coupled solve -> probe dataset (netCDF).
+
+Probes (paper §3, Figs. 3-10, and beyond):
+  every step   outlet/inlet volumetric flux, mean axial outlet velocity (the paper's measure), maximum
+               von Mises stress over the stent and where it occurs, fluid volume, flux through every
+               side hole, maximum wall displacement, Newton iterations;
+  probe times  von Mises along the probe line (r = 0.75 mm, plane y = 0, away from the holes), ureter
+               outer-wall radial displacement vs z, velocity along the hole axis (y) across the
+               outlet-most hole at mid-wall radius.
+Every variable carries CF `units` and `long_name`; the dataset carries provenance.
+"""
+from __future__ import annotations
+
+import logging
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+import xarray as xr
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from dolfinx.mesh import compute_midpoints
+from mpi4py import MPI
+
+from . import tags
+from .fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
+from .fsi import physics
+from .fsi.problem import MonolithicFSI
+from .geometry import StentModel, UreterGeometry, hole_pair_positions
+from .probes import CellField, PointProbe, assemble_scalar, von_mises
+from .provenance import atomic_path, provenance_attrs
+from .scenes.ureter import materials, pulse_centre, ureter_scene
+
+log = logging.getLogger("ureterfsi.study")
+
+HOLE_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.5}   # share of each hole inside the model
+N_LINE, N_HOLE = 201, 21
+
+
+@dataclass
+class RunSpec:
+    model: str
+    level: str
+    symmetry: str
+    mesh_path: str
+    end: float | None = None       # override of time.end (short test runs)
+    dt: float | None = None        # override of time.dt
+
+
+def solver_options(cfg: dict) -> SolverOptions:
+    s = cfg["solver"]
+    return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
+                         newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
+                         newton_max_iterations=s["newton_max_iterations"], linear_solver=s["linear_solver"])
+
+
+class UreterProbes(Observer):
+    """Records the study's quantities of interest after every accepted step."""
+
+    def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times):
+        self.pb, self.cfg, self.symmetry = pb, cfg, symmetry
+        self.geom = g = UreterGeometry.from_config(cfg)
+        self.axisymmetric = pb.scene.axisymmetric
+        self.probe_times = list(probe_times)
+        ops, mesh, comm = pb.ops, pb.mesh, pb.comm
+        X, Xdot = pb.split(), pb.split(pb.x_dot)
+        v, u, w = X["velocity"], X["displacement"], Xdot["displacement"]
+        F = physics.deformation_gradient(ops, u)
+        J = ufl.det(F)
+        N = ops.normal()
+        n_da = J * ufl.inv(F).T * N
+        ax = 1 if self.axisymmetric else 2
+        e_z = ufl.as_vector([0.0, 0.0, 1.0])
+        rel = ops.vec(v) - ops.vec(w)
+        ds, dx = pb.ds, pb.dx
+        self.forms = {
+            "outlet_flux": fem.form(ufl.dot(rel, n_da) * ops.weight * ds(tags.OUTLET)),
+            "inlet_flux": fem.form(-ufl.dot(rel, n_da) * ops.weight * ds(tags.INLET)),
+            "outlet_area": fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight * ds(tags.OUTLET)),
+            "outlet_axial_velocity_integral": fem.form(ufl.dot(ops.vec(v), e_z) * ufl.sqrt(ufl.dot(n_da, n_da))
+                                                       * ops.weight * ds(tags.OUTLET)),
+            "fluid_volume": fem.form(J * ops.weight * dx(tags.FLUID)),
+        }
+        self.comm = comm
+        self.fraction = {"full": 1.0, "half": 2.0, "quarter": 4.0, "axisymmetric": 1.0}[symmetry]
+
+        # wall displacement along the outer surface (x = R_o, y = 0 or (r, z) = (R_o, z))
+        z = np.linspace(0.0, g.length, N_LINE)
+        self.z = z
+        line = (np.c_[np.full_like(z, g.ureter_outer_radius), z] if self.axisymmetric
+                else np.c_[np.full_like(z, g.ureter_outer_radius), np.zeros_like(z), z])
+        self.wall_probe = PointProbe(mesh, line)
+        self.displacement = fem.Function(pb.W.sub(pb.index["displacement"]).collapse()[0])
+        self.velocity = fem.Function(pb.W.sub(pb.index["velocity"]).collapse()[0])
+
+        self.has_stent = model.stent and not self.axisymmetric
+        if self.has_stent:
+            stent = pb.scene.solids[1].material
+            sigma = physics.elastic_first_piola(ops, stent, u)
+            if stent.kinematics != "linear":   # Cauchy stress sigma = J^-1 P F^T (paper eq. 15)
+                sigma = sigma * F.T / J
+            self.stent_vm = CellField(mesh, von_mises(sigma), 1, pb._cells([tags.STENT]))
+            self.stent_probe = PointProbe(mesh, np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
+            # holes: channel cells (fluid, r_i < R < r_o) grouped by pair position and side
+            self.hole_z = hole_pair_positions(g, model)
+            sides = [1.0] if symmetry == "quarter" else [1.0, -1.0]
+            self.holes = [(zk, sd) for zk in self.hole_z for sd in sides]
+            Q = fem.FunctionSpace(mesh, ("DG", 0))
+            Xc = ufl.SpatialCoordinate(mesh)
+            R = ufl.sqrt(Xc[0] ** 2 + Xc[1] ** 2)
+            e_r = ufl.as_vector([Xc[0] / R, Xc[1] / R, 0.0])
+            grad_chi = e_r / (g.stent_outer_radius - g.stent_inner_radius)
+            # Q_k = int_channel J F^-1 (v - w) . Grad chi dX, chi = (R - r_i)/(r_o - r_i): flux through
+            # any surface R = const of the channel (exact for a divergence-free field); outward positive.
+            self.hole_form = fem.form(J * ufl.dot(ufl.inv(F) * rel, grad_chi) * ufl.TestFunction(Q) * dx(tags.FLUID))
+            self.hole_vec = fem_petsc.create_vector(self.hole_form)
+            n_local = mesh.topology.index_map(mesh.topology.dim).size_local
+            fluid = pb._cells([tags.FLUID])
+            fluid = fluid[fluid < n_local]
+            mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
+            Rm = np.hypot(mid[:, 0], mid[:, 1])
+            chan = (Rm > g.stent_inner_radius) & (Rm < g.stent_outer_radius)
+            self.hole_cells = []
+            for zk, sd in self.holes:
+                sel = chan & (np.abs(mid[:, 2] - zk) < 2 * g.hole_radius) & (np.sign(mid[:, 1]) == sd)
+                self.hole_cells.append(Q.dofmap.list.array[fluid[sel]])
+            zh = float(self.hole_z.max())
+            s = np.linspace(-g.hole_radius, g.hole_radius, N_HOLE)
+            self.hole_s = s
+            self.hole_probe = PointProbe(mesh, np.c_[np.zeros_like(s), np.full_like(s, g.probe_radius), zh + s])
+            self.outlet_hole_z = zh
+        self.series = {k: [] for k in self.series_names()}
+        self.snapshots = {k: [] for k in self.snapshot_names()}
+        self.snapshot_times = []
+
+    def series_names(self):
+        names = ["time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume",
+                 "max_wall_displacement"]
+        if self.has_stent:
+            names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
+                      "stent_max_von_mises_z", "hole_flux"]
+        return names
+
+    def snapshot_names(self):
+        names = ["wall_radial_displacement"]
+        if self.has_stent:
+            names += ["stent_von_mises_line", "hole_velocity_y"]
+        return names
+
+    def observe(self, pb: MonolithicFSI, step: int) -> None:
+        val = {k: assemble_scalar(f, self.comm) for k, f in self.forms.items()}
+        s = self.series
+        s["time"].append(pb.time)
+        s["outlet_flux"].append(self.fraction * val["outlet_flux"])
+        s["inlet_flux"].append(self.fraction * val["inlet_flux"])
+        s["outlet_mean_axial_velocity"].append(val["outlet_axial_velocity_integral"] / val["outlet_area"])
+        s["fluid_volume"].append(self.fraction * val["fluid_volume"])
+        self.displacement.x.array[:] = pb.field("displacement").x.array
+        wall = self.wall_probe(self.displacement)
+        s["max_wall_displacement"].append(float(np.nanmax(np.abs(wall[:, 0]))))
+        if self.has_stent:
+            self.stent_vm.update()
+            vmax, where = self.stent_vm.maximum()
+            s["stent_max_von_mises"].append(vmax)
+            for c, name in zip(where, "xyz"):
+                s[f"stent_max_von_mises_{name}"].append(c)
+            vec = self.hole_vec
+            with vec.localForm() as loc:
+                loc.set(0.0)
+            fem_petsc.assemble_vector(vec, self.hole_form)
+            arr = vec.array
+            local = np.array([arr[c[c < arr.size]].sum() for c in self.hole_cells])
+            flux = _allreduce_sum(self.comm, local)
+            s["hole_flux"].append((flux / HOLE_FRACTION[self.symmetry]).tolist())
+        if any(abs(pb.time - t) < 1e-9 for t in self.probe_times):
+            self.snapshot_times.append(pb.time)
+            self.snapshots["wall_radial_displacement"].append(wall[:, 0].tolist())
+            if self.has_stent:
+                self.snapshots["stent_von_mises_line"].append(self.stent_probe(self.stent_vm.function)[:, 0].tolist())
+                self.velocity.x.array[:] = pb.field("velocity").x.array
+                self.snapshots["hole_velocity_y"].append(self.hole_probe(self.velocity)[:, 1].tolist())
+
+    def state(self) -> dict:
+        return {"series": self.series, "snapshots": self.snapshots, "snapshot_times": self.snapshot_times}
+
+    def load_state(self, state: dict) -> None:
+        self.series, self.snapshots = state["series"], state["snapshots"]
+        self.snapshot_times = state["snapshot_times"]
+
+
+def _allreduce_sum(comm, arr):
+    out = np.zeros_like(arr)
+    comm.Allreduce(np.ascontiguousarray(arr), out, op=MPI.SUM)
+    return out
+
+
+# CF metadata of the dataset variables: name -> (units, long_name)
+CF = {
+    "time": ("s", "time"),
+    "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
+    "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet (kidney side), positive into the ureter"),
+    "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
+    "fluid_volume": ("m3", "volume of the urine domain"),
+    "max_wall_displacement": ("m", "maximum radial displacement of the ureter outer wall along the probe line"),
+    "stent_max_von_mises": ("Pa", "maximum von Mises stress over the stent volume"),
+    "stent_max_von_mises_x": ("m", "x of the maximum stent von Mises stress (reference configuration)"),
+    "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
+    "stent_max_von_mises_z": ("m", "z of the maximum stent von Mises stress (reference configuration)"),
+    "hole_flux": ("m3 s-1", "volumetric flow rate through each side hole, positive from the stent lumen outward"),
+    "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
+    "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
+    "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y) across the outlet-most side hole"),
+    "z": ("m", "axial position along the ureter (0 inlet, L outlet)"),
+    "probe_time": ("s", "probe time"),
+    "hole_offset": ("m", "axial distance from the centre of the outlet-most hole at mid-wall radius"),
+    "hole_z": ("m", "axial position of the side hole"),
+    "hole_side": ("1", "side of the side hole on the y axis (+1 or -1)"),
+    "pulse_centre": ("m", "axial position of the centre of the peristaltic pulse"),
+    "step_time": ("s", "time at the end of the step"),
+    "step_dt": ("s", "time step"),
+    "newton_iterations": ("1", "Newton iterations of the step"),
+    "newton_residual": ("1", "final Newton residual norm of the step"),
+    "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid mesh"),
+    "step_wall_time": ("s", "wall-clock time of the step"),
+}
+
+
+def _cf(da: xr.DataArray, name: str) -> xr.DataArray:
+    units, long_name = CF[name]
+    da.attrs.update(units=units, long_name=long_name)
+    return da
+
+
+def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_attrs: dict) -> xr.Dataset:
+    """Assemble the run's probe records into a CF-annotated dataset."""
+    t = np.asarray(obs.series["time"])
+    ds = xr.Dataset(coords={"time": _cf(xr.DataArray(t, dims="time"), "time")})
+    for name in obs.series_names():
+        if name in ("time", "hole_flux"):
+            continue
+        ds[name] = _cf(xr.DataArray(np.asarray(obs.series[name]), dims="time"), name)
+    ds["pulse_centre"] = _cf(xr.DataArray(pulse_centre(cfg["peristalsis"], t), dims="time"), "pulse_centre")
+    ds = ds.assign_coords(z=_cf(xr.DataArray(obs.z, dims="z"), "z"),
+                          probe_time=_cf(xr.DataArray(np.asarray(obs.snapshot_times), dims="probe_time"),
+                                         "probe_time"))
+    for name in obs.snapshot_names():
+        data = np.asarray(obs.snapshots[name]).reshape(len(obs.snapshot_times), -1)
+        dim = "hole_offset" if name == "hole_velocity_y" else "z"
+        ds[name] = _cf(xr.DataArray(data, dims=("probe_time", dim)), name)
+    if obs.has_stent:
+        ds = ds.assign_coords(hole_offset=_cf(xr.DataArray(obs.hole_s, dims="hole_offset"), "hole_offset"),
+                              hole_z=_cf(xr.DataArray([h[0] for h in obs.holes], dims="hole"), "hole_z"),
+                              hole_side=_cf(xr.DataArray([h[1] for h in obs.holes], dims="hole"), "hole_side"))
+        ds["hole_flux"] = _cf(xr.DataArray(np.asarray(obs.series["hole_flux"]), dims=("time", "hole")), "hole_flux")
+        ds.attrs["outlet_hole_z"] = obs.outlet_hole_z
+    steps = {"step_time": [r.time for r in records], "step_dt": [r.dt for r in records],
+             "newton_iterations": [r.newton_iterations for r in records],
+             "newton_residual": [r.residual for r in records],
+             "min_ale_jacobian": [r.min_ale_jacobian for r in records],
+             "step_wall_time": [r.wall_time for r in records]}
+    for name, values in steps.items():
+        ds[name] = _cf(xr.DataArray(np.asarray(values), dims="step"), name)
+    ds.attrs.update(provenance_attrs(cfg, model=spec.model, mesh_level=spec.level, symmetry=spec.symmetry,
+                                     fidelity="fully_coupled", **extra_attrs))
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi probes, model {spec.model}, mesh {spec.level} ({spec.symmetry})"
+    return ds
+
+
+def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = None) -> xr.Dataset:
+    """Fully coupled solve of one model on one mesh; writes the probe dataset atomically."""
+    from mpi4py import MPI as _MPI
+
+    from .mesh import load_mesh
+
+    wall0 = _time.perf_counter()
+    comm = _MPI.COMM_WORLD
+    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
+    scene = ureter_scene(cfg, mesh, cell_tags, facet_tags, axisymmetric=spec.symmetry == "axisymmetric")
+    pb = MonolithicFSI(scene, solver_options(cfg))
+    ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
+    ncells = mesh.topology.index_map(mesh.topology.dim).size_global
+    log.info("model %s, mesh %s (%s): %d cells, %d dofs, %d processes, setup %.1f s", spec.model, spec.level,
+             spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
+    tcfg = cfg["time"]
+    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"],
+                            output_times=tcfg["probe_times"], max_halvings=cfg["solver"]["max_step_halvings"],
+                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
+                            checkpoint_path=checkpoint_path)
+    obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, tcfg["probe_times"])
+    integrator = TimeIntegrator(pb, settings, [obs])
+    if not integrator.has_checkpoint():
+        its, hist = pb.solve_steady()
+        log.info("initial state: fluid at rest at the reference pressure, %d Newton iterations, residual %.2e",
+                 its, hist[-1])
+    records = integrator.run()
+    wall = _time.perf_counter() - wall0
+    ds = probes_dataset(obs, records, cfg, spec, {
+        "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
+        "time_step_s": settings.dt, "end_time_s": settings.end,
+        "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}",
+        "timings": {k: round(v, 2) for k, v in pb.timings.items()}})
+    if comm.rank == 0:
+        with atomic_path(out_path) as tmp:
+            ds.to_netcdf(tmp)
+    comm.Barrier()
+    integrator.remove_checkpoint()
+    log.info("done in %.1f s -> %s", wall, out_path)
+    return ds
+
+
+def configure_logging(stream=None) -> None:
+    """Progress lines of the engine and the study on rank 0 (warnings from every rank)."""
+    from mpi4py import MPI as _MPI
+
+    rank = _MPI.COMM_WORLD.rank
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s: %(message)s", "%H:%M:%S"))
+    for name in ("ureterfsi",):
+        lg = logging.getLogger(name)
+        lg.handlers[:] = [handler]
+        lg.setLevel(logging.INFO if rank == 0 else logging.WARNING)
+        lg.propagate = False
+
+
+def main(argv=None) -> int:
+    import argparse
+    import sys
+
+    from .config import ConfigError, load_config_files
+
+    ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
+                                 description="Fully coupled FSI solve of one stent model on one mesh.")
+    ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
+    ap.add_argument("--model", required=True)
+    ap.add_argument("--level", required=True)
+    ap.add_argument("--symmetry", required=True)
+    ap.add_argument("--mesh", required=True, help="gmsh .msh file of the model")
+    ap.add_argument("--out", required=True, help="netCDF output")
+    ap.add_argument("--checkpoint", default=None, help="checkpoint path (resumes if present)")
+    ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
+    ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
+    args = ap.parse_args(argv)
+    configure_logging()
+    try:
+        cfg = load_config_files(args.config)
+    except ConfigError as err:
+        print(err, file=sys.stderr)
+        return 2
+    spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt)
+    run(cfg, spec, args.out, args.checkpoint)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
