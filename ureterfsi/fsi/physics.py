@@ -63,6 +63,10 @@ def mooney_rivlin_isochoric_energy(ops, mat: MooneyRivlin, F):
     J = ufl.det(F)
     I1 = ufl.tr(C)
     I2 = 0.5 * (I1**2 - ufl.tr(C * C))
+    if ops.dim == 2:
+        # plane strain: the invariants of the 3D C = diag(C_2D, 1) (F_33 = 1, so J is unchanged);
+        # the 2D traces alone give I1b - 3 = -1 and a constant I2b at rest (prestress, c01 inert)
+        I1, I2 = I1 + 1.0, I2 + ufl.tr(C)
     I1b = J ** (-2.0 / 3.0) * I1 - 3.0
     I2b = J ** (-4.0 / 3.0) * I2 - 3.0
     return (mat.c10 * I1b + mat.c01 * I2b + mat.c20 * I1b**2 + mat.c02 * I2b**2 + mat.c11 * I1b * I2b)
