@@ -265,8 +265,15 @@ class MonolithicFSI:
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
         Q = fem.FunctionSpace(self.mesh, ("DG", 1))
         self._jac_fn = fem.Function(Q)
-        self.min_jacobian_expr = fem.Expression(ufl.det(physics.deformation_gradient(self.ops, u)),
-                                                Q.element.interpolation_points())
+        F = physics.deformation_gradient(self.ops, u)
+        J = ufl.det(F)
+        if self.ops.axisymmetric:
+            # The hoop stretch 1 + u_r/r is 0/0 = NaN at vertices on the axis (and NaN <= threshold is
+            # False, so the inversion guard never fired); use its limit 1 + du_r/dr there.
+            g = ufl.grad(u)
+            F_axis = ufl.as_tensor([[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])
+            J = ufl.conditional(ufl.gt(abs(self.ops.r), 1e-300), J, ufl.det(F_axis))
+        self.min_jacobian_expr = fem.Expression(J, Q.element.interpolation_points())
         cells = self._cells(fluid_tags)
         cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
         self._jac_dofs = np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[cells].ravel())
