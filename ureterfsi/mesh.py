@@ -1,0 +1,367 @@
+"""Conforming gmsh meshes of the stented ureter (paper §2.1 geometry, Table 1 hole pairs, §2.4.1 mesh).
+
+One OpenCASCADE model per (model, level, symmetry): ureter wall tube, fluid lumen, coaxial stent tube with
+radial side holes on the y axis, fragmented into a conforming multi-region tetrahedral mesh. Cells and
+facets are gmsh physical groups numbered as in `ureterfsi.tags`; every boundary facet and every interface
+facet carries exactly one tag. "axisymmetric" (model 1 only) is the r-z section, r = x, z = y.
+
+choice: the paper meshes with COMSOL (boundary-layer prisms, §2.4.1); here all elements are simplices,
+sized by analytic radial distance fields (exact, no sampling) and a Distance field on the hole walls.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import gmsh
+import numpy as np
+
+from ureterfsi import tags
+from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions, subdomain_volumes
+from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
+
+SYMMETRY_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.25}
+# choice: away from a refined region the element size grows linearly to the bulk size over
+# (h_bulk - h) / GRADING (sizes at size factor 1): refinement confined to a thin layer around the holes,
+# the stent and the ureter wall.
+GRADING = 0.5
+# choice: rotation of the z-cylinders about z (seam line at 225 deg, inside the removed part of every
+# symmetric model) and of the hole cylinders about y (seam at x = -a), so no seam lies on a cut plane.
+SEAM_ANGLE_Z = 1.25 * math.pi
+SEAM_ANGLE_HOLE = -0.5 * math.pi
+
+
+def _request(cfg: dict, model: str, level: str, symmetry: str):
+    """Validate a mesh request; return geometry, stent model, hole-pair positions and size factor."""
+    if str(model) not in cfg["models"]:
+        raise ValueError(f"unknown model {model!r}; configured models: {sorted(cfg['models'])}")
+    if level not in cfg["mesh"]["levels"]:
+        raise ValueError(f"unknown mesh level {level!r}; configured levels: {list(cfg['mesh']['levels'])}")
+    if symmetry not in (*SYMMETRY_FRACTION, "axisymmetric"):
+        raise ValueError(f"unknown symmetry {symmetry!r}; use full, half, quarter or axisymmetric")
+    geom, sm = UreterGeometry.from_config(cfg), StentModel.from_config(cfg, model)
+    if symmetry == "axisymmetric" and sm.stent:
+        raise ValueError(f"model {model} has a stent with side holes on the y axis: it is not axisymmetric; "
+                         "axisymmetric meshes exist only for the stent-free model")
+    if not sm.stent and sm.holes:
+        raise ValueError(f"model {model} has {sm.holes} side holes but no stent")
+    if sm.holes % 2:
+        raise ValueError(f"model {model}: side holes come in opposite pairs, {sm.holes} is odd")
+    z = hole_pair_positions(geom, sm)
+    a = geom.hole_radius
+    if sm.holes and a >= geom.stent_inner_radius:
+        raise ValueError(f"hole radius {a} m must be smaller than the stent inner radius {geom.stent_inner_radius} m")
+    if z.size and (z.min() - a <= 0 or z.max() + a >= geom.length):
+        raise ValueError(f"model {model}: a side hole cuts a stent end face (hole_end_clearance too small)")
+    if z.size > 1 and np.diff(z).min() <= 2 * a:
+        raise ValueError(f"model {model}: neighbouring side holes overlap (pair spacing <= hole diameter)")
+    return geom, sm, z, float(cfg["mesh"]["levels"][level]["size_factor"])
+
+
+def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, symmetry: str) -> dict:
+    """OCC solids fragmented into conforming regions; returns region name -> volume tags."""
+    occ, L = gmsh.model.occ, geom.length
+
+    def zcyl(r):
+        tag = occ.addCylinder(0, 0, 0, 0, 0, L, r)
+        occ.rotate([(3, tag)], 0, 0, 0, 0, 0, 1, SEAM_ANGLE_Z)
+        return [(3, tag)]
+
+    def keep(dimtags):  # the x >= 0 (half) or x, y >= 0 (quarter) part
+        if symmetry == "full":
+            return dimtags
+        big = 2 * geom.ureter_outer_radius
+        y0 = 0.0 if symmetry == "quarter" else -big
+        box = occ.addBox(0, y0, -0.1 * L, big, big - y0, 1.2 * L)
+        return occ.intersect(dimtags, [(3, box)])[0]
+
+    outer, lumen = keep(zcyl(geom.ureter_outer_radius)), keep(zcyl(geom.ureter_inner_radius))
+    tools = [outer, lumen]
+    if sm.stent:
+        holes = []
+        for z in z_holes:
+            ro = 1.5 * geom.stent_outer_radius
+            tag = occ.addCylinder(0, -ro, z, 0, 2 * ro, 0, geom.hole_radius)
+            occ.rotate([(3, tag)], 0, 0, z, 0, 1, 0, SEAM_ANGLE_HOLE)
+            holes.append((3, tag))
+        tube = occ.cut(zcyl(geom.stent_outer_radius), zcyl(geom.stent_inner_radius) + holes)[0]
+        tools.append(keep(tube))
+    _, pieces = occ.fragment(tools[0], [d for t in tools[1:] for d in t])
+    occ.synchronize()
+    n0, n1 = len(tools[0]), len(tools[0]) + len(tools[1])
+    inside = lambda part: {t for dts in part for _, t in dts}  # noqa: E731
+    everything, lumen_set = inside(pieces[:n0]), inside(pieces[n0:n1])
+    stent = inside(pieces[n1:])
+    return {tags.URETER: sorted(everything - lumen_set), tags.FLUID: sorted(lumen_set - stent),
+            tags.STENT: sorted(stent)}
+
+
+def _facet_groups(regions: dict, dim: int, geom: UreterGeometry) -> dict:
+    """Facet tag -> boundary entities: interfaces by shared ownership, exterior faces by position."""
+    owner: dict[int, list] = {}
+    for cell_tag, ents in regions.items():
+        for e in ents:
+            for _, f in gmsh.model.getBoundary([(dim, e)], combined=False, oriented=False):
+                owner.setdefault(abs(f), []).append(cell_tag)
+    tol, L = 1e-3 * geom.hole_radius, geom.length  # OCC bounding boxes are padded by ~1e-7 m
+    ends = {tags.FLUID: (tags.INLET, tags.OUTLET), tags.URETER: (tags.URETER_ENDS,) * 2,
+            tags.STENT: (tags.STENT_ENDS,) * 2}
+    interface = {frozenset((tags.FLUID, tags.URETER)): tags.FLUID_URETER,
+                 frozenset((tags.FLUID, tags.STENT)): tags.FLUID_STENT}
+    groups: dict[int, list] = {}
+    for f, cells in owner.items():
+        x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(dim - 1, f)
+        if dim == 2:  # r-z section: r = x, z = y
+            x0, y0, z0, x1, y1, z1 = x0, None, y0, x1, None, y1
+        if len(cells) == 2:
+            key = interface.get(frozenset(cells))
+            if key is None:
+                raise RuntimeError(f"unexpected interface between cell tags {cells}")
+        elif abs(z1) < tol or abs(z0 - L) < tol:
+            key = ends[cells[0]][abs(z1) >= tol]
+        elif abs(x0) < tol and abs(x1) < tol:
+            key = tags.AXIS if dim == 2 else tags.SYMMETRY_X
+        elif dim == 3 and abs(y0) < tol and abs(y1) < tol:
+            key = tags.SYMMETRY_Y
+        elif cells[0] == tags.URETER:
+            key = tags.URETER_OUTER
+        else:
+            raise RuntimeError(f"boundary entity {f} of cell tag {cells[0]} is not classified")
+        groups.setdefault(key, []).append(f)
+    return groups
+
+
+def _threshold(in_field: int, size: float, bulk: float, dist_min: float, width: float) -> int:
+    """Size `size` up to distance dist_min, growing linearly to `bulk` at dist_min + width."""
+    field = gmsh.model.mesh.field
+    th = field.add("Threshold")
+    for name, value in (("InField", in_field), ("SizeMin", size), ("SizeMax", bulk), ("DistMin", dist_min),
+                        ("DistMax", dist_min + width)):
+        field.setNumber(th, name, value)
+    return th
+
+
+def _math(expr: str) -> int:
+    f = gmsh.model.mesh.field.add("MathEval")
+    gmsh.model.mesh.field.setString(f, "F", expr)
+    return f
+
+
+def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, dim: int) -> None:
+    """Min of Threshold fields: hole walls, stent wall, ureter wall; bulk size elsewhere (§2.4.1).
+
+    The transition widths (h_bulk - h) / GRADING are those of size factor 1 at every level, so every
+    region is refined by f and element counts grow as f^-3 (about 2.3x per level for f steps of 0.76).
+    """
+    s1 = cfg["mesh"]["sizes"]
+    s = {k: v * f for k, v in s1.items()}
+    width = {k: (s1["fluid_bulk"] - v) / GRADING for k, v in s1.items()}
+    r = "Sqrt(x^2+y^2)" if dim == 3 else "x"
+    fields = [_threshold(_math(f"{geom.ureter_inner_radius!r}-{r}"), s["ureter_wall"], s["fluid_bulk"], 0.0,
+                         width["ureter_wall"])]
+    if hole_walls:
+        rm = geom.probe_radius
+        half = geom.stent_outer_radius - rm
+        fields.append(_threshold(_math(f"Abs({r}-{rm!r})-{half!r}"), s["stent_wall"], s["fluid_bulk"], 0.0,
+                                 width["stent_wall"]))
+        dist = gmsh.model.mesh.field.add("Distance")
+        gmsh.model.mesh.field.setNumbers(dist, "FacesList", hole_walls)
+        gmsh.model.mesh.field.setNumber(dist, "NumPointsPerCurve", 40)
+        # the whole hole channel (distance <= hole radius from its wall) gets the hole size
+        fields.append(_threshold(dist, s["hole"], s["fluid_bulk"], geom.hole_radius, width["hole"]))
+    fmin = gmsh.model.mesh.field.add("Min")
+    gmsh.model.mesh.field.setNumbers(fmin, "FieldsList", fields)
+    gmsh.model.mesh.field.setAsBackgroundMesh(fmin)
+    for name, value in (("MeshSizeExtendFromBoundary", 0), ("MeshSizeFromPoints", 0),
+                        ("MeshSizeFromCurvature", 0), ("MeshSizeMax", s["fluid_bulk"])):
+        gmsh.option.setNumber(f"Mesh.{name}", value)
+
+
+def _hole_walls(stent_vols: list, geom: UreterGeometry) -> list:
+    """Stent boundary surfaces that are hole walls (cylinders shorter in z than a hole diameter)."""
+    out = set()
+    for v in stent_vols:
+        for _, s in gmsh.model.getBoundary([(3, v)], combined=False, oriented=False):
+            bb = gmsh.model.getBoundingBox(2, abs(s))
+            if gmsh.model.getType(2, abs(s)) == "Cylinder" and bb[5] - bb[2] < 3 * geom.hole_radius:
+                out.add(abs(s))
+    return sorted(out)
+
+
+def _optimize(dim: int) -> str:
+    """Netgen optimisation of the tetrahedra where gmsh was built with it (Debian's gmsh 4.8 is not):
+    otherwise gmsh's own tetrahedron optimiser once more followed by node relocation."""
+    if dim == 2:
+        return "none"
+    if "Netgen" in gmsh.option.getString("General.BuildOptions").split():
+        gmsh.model.mesh.optimize("Netgen")
+        return "netgen"
+    gmsh.model.mesh.optimize("")
+    gmsh.model.mesh.optimize("Relocate3D")
+    return "gmsh+relocate3d"
+
+
+def _elements(dim: int, phys: int):
+    """Node-tag connectivity (n, dim+1) of the simplices of one physical group."""
+    conn = []
+    for e in gmsh.model.getEntitiesForPhysicalGroup(dim, phys):
+        types, _, nodes = gmsh.model.mesh.getElements(dim, e)
+        conn += [np.asarray(n).reshape(-1, dim + 1) for n in nodes]
+    return np.vstack(conn) if conn else np.zeros((0, dim + 1), dtype=np.uint64)
+
+
+def _measure(conn: np.ndarray, coords: np.ndarray) -> float:
+    """Total volume (3D) or area (2D) of simplices."""
+    p = coords[conn - 1][:, :, :conn.shape[1] - 1]
+    d = p[:, 1:] - p[:, :1]
+    return float(np.abs(np.linalg.det(d)).sum() / math.factorial(d.shape[1]))
+
+
+def _quality(dim: int) -> dict:
+    """gmsh minSICN (plugin AnalyseMeshQuality, ICN measure) of all cells: min, 1st percentile, median."""
+    for opt, val in (("JacobianDeterminant", 0), ("IGEMeasure", 0), ("ICNMeasure", 1), ("CreateView", 1),
+                     ("DimensionOfElements", dim)):
+        gmsh.plugin.setNumber("AnalyseMeshQuality", opt, val)
+    gmsh.plugin.run("AnalyseMeshQuality")
+    view = gmsh.view.getTags()[-1]
+    _, _, data, _, _ = gmsh.view.getModelData(view, 0)
+    gmsh.view.remove(view)
+    q = np.concatenate(data)
+    return {"min": float(q.min()), "p01": float(np.percentile(q, 1)), "median": float(np.median(q))}
+
+
+def hole_channels(coords: np.ndarray, tris: np.ndarray, geom: UreterGeometry) -> list:
+    """Hole channels found in a mesh: connected groups of FLUID_STENT triangles on hole walls.
+
+    A hole-wall facet has its normal across the radial direction (hole axis radial), unlike the stent's
+    lumen and outer walls. Returns the (y sign, z centre) of every channel, sorted by z then y.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    p = coords[tris - 1]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    c = p.mean(axis=1)
+    er = c[:, :2] / np.linalg.norm(c[:, :2], axis=1)[:, None]
+    wall = tris[np.abs((n[:, :2] * er).sum(axis=1)) < 0.7]
+    if not len(wall):
+        return []
+    nodes, local = np.unique(wall, return_inverse=True)
+    local = local.reshape(-1, 3)
+    rows = np.repeat(np.arange(len(wall)), 3)  # triangle-node incidence; components via bipartite graph
+    graph = coo_matrix((np.ones(rows.size), (rows, len(wall) + local.ravel())),
+                       shape=(len(wall) + nodes.size,) * 2)
+    _, label = connected_components(graph, directed=False)
+    cw = coords[wall - 1].mean(axis=1)
+    out = [(int(np.sign(cw[label[:len(wall)] == k, 1].mean())), float(cw[label[:len(wall)] == k, 2].mean()))
+           for k in np.unique(label[:len(wall)])]
+    return sorted(out, key=lambda t: (round(t[1], 6), t[0]))
+
+
+def _axisymmetric(geom: UreterGeometry) -> dict:
+    """r-z section of the stent-free model: fluid [0, Ri] x [0, L], ureter wall [Ri, Ro] x [0, L]."""
+    occ, L = gmsh.model.occ, geom.length
+    fluid = occ.addRectangle(0, 0, 0, geom.ureter_inner_radius, L)
+    wall = occ.addRectangle(geom.ureter_inner_radius, 0, 0, geom.ureter_outer_radius - geom.ureter_inner_radius, L)
+    _, pieces = occ.fragment([(2, fluid)], [(2, wall)])
+    occ.synchronize()
+    return {tags.FLUID: [t for _, t in pieces[0]], tags.URETER: [t for _, t in pieces[1]]}
+
+
+def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidecar_path) -> dict:
+    """Build, check and write one mesh (.msh 4.1, physical groups only) and its JSON sidecar (§2.4.1)."""
+    geom, sm, z_holes, f = _request(cfg, str(model), level, symmetry)
+    dim = 2 if symmetry == "axisymmetric" else 3
+    t0 = time.perf_counter()
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("General.NumThreads", 1)
+        gmsh.option.setNumber("Mesh.RandomSeed", 1)
+        gmsh.model.add(f"model{model}_{level}_{symmetry}")
+        regions = _axisymmetric(geom) if dim == 2 else _solids(geom, sm, z_holes, symmetry)
+        regions = {k: v for k, v in regions.items() if v}
+        facets = _facet_groups(regions, dim, geom)
+        for tag, ents in regions.items():
+            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, ents, tag), tags.CELL_NAMES[tag])
+        for tag, ents in facets.items():
+            gmsh.model.setPhysicalName(dim - 1, gmsh.model.addPhysicalGroup(dim - 1, ents, tag),
+                                       tags.FACET_NAMES[tag])
+        _size_fields(cfg, geom, f, _hole_walls(regions.get(tags.STENT, []), geom) if dim == 3 else [], dim)
+        gmsh.model.mesh.generate(dim)
+        optimizer = _optimize(dim) if cfg["mesh"]["optimize"] else "none"
+        gmsh.model.mesh.renumberNodes()
+        gmsh.model.mesh.renumberElements()
+        wall_time = time.perf_counter() - t0
+
+        node_tags, xyz, _ = gmsh.model.mesh.getNodes()
+        coords = np.zeros((int(node_tags.max()), 3))
+        coords[node_tags.astype(np.int64) - 1] = xyz.reshape(-1, 3)
+        cells = {tags.CELL_NAMES[t]: _elements(dim, t) for t in regions}
+        names = ("fluid", "ureter", "stent")
+        if dim == 3:
+            analytic = subdomain_volumes(geom, sm, SYMMETRY_FRACTION[symmetry])
+        else:
+            analytic = {"fluid": geom.ureter_inner_radius * geom.length,
+                        "ureter": (geom.ureter_outer_radius - geom.ureter_inner_radius) * geom.length,
+                        "stent": 0.0}
+        measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}
+        channels = (hole_channels(coords, _elements(2, tags.FLUID_STENT), geom)
+                    if tags.FLUID_STENT in facets else [])
+        info = {
+            "model": str(model), "level": level, "symmetry": symmetry, "size_factor": f,
+            "element_type": "triangle" if dim == 2 else "tetrahedron",
+            "cells": {k: int(len(v)) for k, v in cells.items()},
+            "cells_total": int(sum(len(v) for v in cells.values())),
+            "nodes": int(node_tags.size),
+            "quality_minSICN": _quality(dim),
+            "measure": "area" if dim == 2 else "volume",
+            "subdomain_measure": {k: {"mesh": measured[k], "analytic": analytic[k],
+                                      "rel_error": (measured[k] / analytic[k] - 1) if analytic[k] else 0.0}
+                                  for k in names},
+            "hole_pair_z": [float(z) for z in z_holes],
+            "hole_channels_found": len(channels),
+            "hole_channels": [{"y_sign": s, "z": z} for s, z in channels],
+            "facet_tags": {tags.FACET_NAMES[t]: int(len(_elements(dim - 1, t))) for t in sorted(facets)},
+            "optimizer": optimizer,
+            "mesh_wall_time_s": wall_time,
+            "gmsh_version": gmsh.__version__,
+        }
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.option.setNumber("Mesh.SaveAll", 0)
+        gmsh.option.setNumber("Mesh.Binary", 0)
+        with atomic_path(msh_path) as tmp:
+            part = tmp.with_name(tmp.name[:-len(".part")])  # gmsh picks the format from the extension
+            try:
+                gmsh.write(str(part))
+                part.replace(tmp)
+            finally:
+                part.unlink(missing_ok=True)
+    finally:
+        gmsh.finalize()
+    info.update(provenance_attrs(cfg))
+    write_json(sidecar_path, info)
+    return info
+
+
+def load_mesh(msh_path, comm):
+    """(mesh, cell_tags, facet_tags) of a mesh written by build_mesh (gdim 2 for the r-z section).
+
+    dolfinx 0.5.2's gmshio.read_from_msh is broken (finalizes gmsh before building the mesh), so the
+    file is merged here on rank 0 and handed to gmshio.model_to_mesh on every rank.
+    """
+    from dolfinx.io import gmshio
+
+    gdim = None
+    if comm.rank == 0:
+        gmsh.initialize()
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.merge(str(msh_path))
+        gdim = 2 if max(d for d, _ in gmsh.model.getPhysicalGroups()) == 2 else 3
+    gdim = comm.bcast(gdim, root=0)
+    try:
+        return gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim)
+    finally:
+        if comm.rank == 0:
+            gmsh.finalize()

@@ -1,0 +1,30 @@
+# Meshes (paper §2.1, §2.4.1): one gmsh .msh + JSON sidecar per symmetry, model and level.
+
+# Stent-free models are also meshed as the axisymmetric r-z section.
+AXISYMMETRIC_MODELS = [m for m in MODELS if not config["models"][m]["stent"]]
+
+
+rule mesh:
+    output:
+        msh="results/meshes/{symmetry}/model{model}_{level}.msh",
+        json="results/meshes/{symmetry}/model{model}_{level}.json",
+    params:
+        # rerun trigger: the configuration entering a mesh
+        inputs=lambda w: {k: config[k] for k in ("geometry", "mesh")} | {"model": config["models"][w.model]},
+    log:
+        "results/logs/mesh/{symmetry}/model{model}_{level}.log",
+    benchmark:
+        "results/benchmarks/mesh/{symmetry}/model{model}_{level}.tsv"
+    threads: 1
+    script:
+        "../scripts/build_mesh.py"
+
+
+rule all_meshes:
+    input:
+        sorted(set(
+            expand("results/meshes/{symmetry}/model{model}_{level}.{ext}",
+                   symmetry=SYMMETRY, model=MODELS, level=LEVELS, ext=("msh", "json"))
+            + expand("results/meshes/axisymmetric/model{model}_{level}.{ext}",
+                     model=AXISYMMETRIC_MODELS, level=LEVELS, ext=("msh", "json"))
+        )),
