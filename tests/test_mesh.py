@@ -1,0 +1,201 @@
+"""Meshes of the stented ureter (paper §2.1, Table 1, §2.4.1): volumes, hole channels, tags, resolution."""
+import copy
+import hashlib
+import json
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from ureterfsi import tags
+from ureterfsi.config import load_config
+from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.mesh import build_mesh, load_mesh
+
+CASES = [("1", "quarter"), ("2", "quarter"), ("3", "quarter"), ("4", "quarter"), ("4", "half"), ("4", "full"),
+         ("1", "axisymmetric")]
+STENTED = [c for c in CASES if c[0] != "1"]
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config()
+
+
+@pytest.fixture(scope="module")
+def geom(cfg):
+    return UreterGeometry.from_config(cfg)
+
+
+@pytest.fixture(scope="module")
+def built(cfg, tmp_path_factory):
+    """Coarse meshes built once per case: (msh path, sidecar dict, (mesh, cell_tags, facet_tags))."""
+    root, cache = tmp_path_factory.mktemp("meshes"), {}
+
+    def get(model, symmetry):
+        if (model, symmetry) not in cache:
+            msh, side = root / f"{symmetry}_model{model}.msh", root / f"{symmetry}_model{model}.json"
+            build_mesh(cfg, model, "coarse", symmetry, msh, side)
+            cache[model, symmetry] = (msh, json.loads(side.read_text()), load_mesh(msh, MPI.COMM_WORLD))
+        return cache[model, symmetry]
+    return get
+
+
+def _cell_tag_array(mesh, ct):
+    n = mesh.topology.index_map(mesh.topology.dim).size_local
+    out = np.zeros(n, dtype=np.int32)
+    out[ct.indices] = ct.values
+    return out
+
+
+@pytest.mark.parametrize("model,symmetry", CASES)
+def test_volumes_match_analytic(built, model, symmetry):
+    import ufl
+    from dolfinx import fem
+
+    msh, info, (mesh, ct, _) = built(model, symmetry)
+    assert msh.read_text().startswith("$MeshFormat\n4.1 ")
+    dx = ufl.Measure("dx", domain=mesh, subdomain_data=ct)
+    one = fem.Constant(mesh, 1.0)
+    for name, m in info["subdomain_measure"].items():
+        if m["analytic"] == 0.0:
+            assert name not in info["cells"] and m["mesh"] == 0.0
+            continue
+        assert abs(m["rel_error"]) < 5e-3, (name, m)
+        tag = {v: k for k, v in tags.CELL_NAMES.items()}[name]
+        assembled = fem.assemble_scalar(fem.form(one * dx(tag)))
+        assert assembled == pytest.approx(m["mesh"], rel=1e-9)
+    assert info["cells_total"] == sum(info["cells"].values()) == ct.values.size
+
+
+@pytest.mark.parametrize("model,symmetry", STENTED)
+def test_hole_channels(cfg, geom, built, model, symmetry):
+    from dolfinx import geometry
+
+    _, info, (mesh, ct, _) = built(model, symmetry)
+    z = hole_pair_positions(geom, StentModel.from_config(cfg, model))
+    signs = (1,) if symmetry == "quarter" else (-1, 1)
+    assert info["hole_pair_z"] == pytest.approx(list(z))
+    assert info["hole_channels_found"] == len(z) * len(signs)
+    found = sorted((c["y_sign"], c["z"]) for c in info["hole_channels"])
+    expected = sorted((s, zk) for s in signs for zk in z)
+    assert [s for s, _ in found] == [s for s, _ in expected]
+    assert [zc for _, zc in found] == pytest.approx([zk for _, zk in expected], abs=0.1 * geom.hole_radius)
+    # probes: fluid at every hole centre (just off the x = 0 plane), stent wall next to it
+    rm, a, x0 = geom.probe_radius, geom.hole_radius, 0.2 * geom.hole_radius
+    pts = np.array([[x0, s * rm, zk + dz] for s in signs for zk in z for dz in (0.0, 3 * a)])
+    tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
+    cells = geometry.compute_colliding_cells(mesh, geometry.compute_collisions(tree, pts), pts)
+    tag_of = _cell_tag_array(mesh, ct)
+    got = [tag_of[cells.links(i)[0]] for i in range(len(pts))]
+    assert got == [tags.FLUID, tags.STENT] * (len(pts) // 2)
+
+
+EXPECTED_FACETS = {
+    "full": {tags.INLET, tags.OUTLET, tags.URETER_OUTER, tags.URETER_ENDS, tags.STENT_ENDS, tags.FLUID_URETER,
+             tags.FLUID_STENT},
+    "axisymmetric": {tags.INLET, tags.OUTLET, tags.URETER_OUTER, tags.URETER_ENDS, tags.FLUID_URETER, tags.AXIS},
+}
+EXPECTED_FACETS["half"] = EXPECTED_FACETS["full"] | {tags.SYMMETRY_X}
+EXPECTED_FACETS["quarter"] = EXPECTED_FACETS["half"] | {tags.SYMMETRY_Y}
+
+
+@pytest.mark.parametrize("model,symmetry", CASES)
+def test_every_boundary_and_interface_facet_has_one_tag(geom, built, model, symmetry):
+    from dolfinx.mesh import compute_midpoints, exterior_facet_indices
+
+    _, info, (mesh, ct, ft) = built(model, symmetry)
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    f2c = mesh.topology.connectivity(tdim - 1, tdim)
+    # dolfinx would merge a facet listed in two gmsh groups: compare with the gmsh-side counts
+    assert np.unique(ft.indices).size == ft.indices.size == sum(info["facet_tags"].values()), "facet with two tags"
+    tagged = dict(zip(ft.indices.tolist(), ft.values.tolist()))
+    exterior = exterior_facet_indices(mesh.topology)
+    assert all(f in tagged for f in exterior.tolist()), "untagged boundary facet"
+    # interior facets: tagged exactly when they separate two subdomains, with the matching interface tag
+    tag_of = _cell_tag_array(mesh, ct)
+    interface = {frozenset((tags.FLUID, tags.URETER)): tags.FLUID_URETER,
+                 frozenset((tags.FLUID, tags.STENT)): tags.FLUID_STENT}
+    nf = mesh.topology.index_map(tdim - 1).size_local
+    for f in np.setdiff1d(np.arange(nf), exterior):
+        pair = frozenset(tag_of[f2c.links(f)].tolist())
+        assert tagged.get(f) == interface.get(pair), (f, pair, tagged.get(f))
+    expected = EXPECTED_FACETS[symmetry] - ({tags.STENT_ENDS, tags.FLUID_STENT} if model == "1" else set())
+    assert set(tagged.values()) == expected
+    assert {tags.FACET_NAMES[t] for t in expected} == set(info["facet_tags"])
+    # planar tags lie on their planes (axisymmetric: r = x, z = y)
+    mid = compute_midpoints(mesh, tdim - 1, ft.indices)
+    zc, L, eps = tdim - 1, geom.length, 1e-9
+    planes = {tags.INLET: (zc, 0.0), tags.OUTLET: (zc, L), tags.SYMMETRY_X: (0, 0.0), tags.SYMMETRY_Y: (1, 0.0),
+              tags.AXIS: (0, 0.0)}
+    for t, (axis, value) in planes.items():
+        assert np.all(np.abs(mid[ft.values == t, axis] - value) < eps), tags.FACET_NAMES[t]
+    for t in (tags.URETER_ENDS, tags.STENT_ENDS):
+        d = mid[ft.values == t, zc]
+        assert np.all(np.minimum(np.abs(d), np.abs(d - L)) < eps), tags.FACET_NAMES[t]
+
+
+@pytest.mark.parametrize("model,symmetry", [("3", "quarter"), ("4", "full")])
+def test_resolution_across_holes_and_walls(cfg, geom, built, model, symmetry):
+    """Coarse level: >= 4 elements across a hole diameter, >= 2 through the stent and ureter walls."""
+    _, _, (mesh, ct, _) = built(model, symmetry)
+    x = mesh.geometry.x
+    a, ro = geom.hole_radius, geom.stent_outer_radius
+    r = np.hypot(x[:, 0], x[:, 1])
+    tol = 1e-9
+    for zk in hole_pair_positions(geom, StentModel.from_config(cfg, model)):
+        for s in (-1, 1) if symmetry == "full" else (1,):
+            rim = x[(np.abs(r - ro) < tol) & (np.abs(np.hypot(x[:, 0], x[:, 2] - zk) - a) < tol) & (s * x[:, 1] > 0)]
+            theta = np.sort(np.arctan2(rim[:, 2] - zk, rim[:, 0]))
+            gaps = np.diff(theta) if symmetry != "full" else np.diff(np.r_[theta, theta[0] + 2 * math.pi])
+            assert 2 * a * math.sin(gaps.max() / 2) <= 1.02 * (2 * a) / 4, (zk, s, len(rim))
+    # a cell touching both surfaces of a wall spans it with one element: must be rare
+    dofs = mesh.geometry.dofmap.array.reshape(-1, 4)
+    tag_of = _cell_tag_array(mesh, ct)
+    for tag, ri, rw in ((tags.STENT, geom.stent_inner_radius, ro),
+                        (tags.URETER, geom.ureter_inner_radius, geom.ureter_outer_radius)):
+        rc = r[dofs[tag_of == tag]]
+        eps = 0.02 * (rw - ri)
+        spanning = (np.abs(rc - ri) < eps).any(axis=1) & (np.abs(rc - rw) < eps).any(axis=1)
+        assert spanning.mean() < 0.02, (tags.CELL_NAMES[tag], spanning.mean())
+
+
+def test_mesh_is_deterministic(cfg, built, tmp_path):
+    msh, info, _ = built("4", "quarter")
+    again = tmp_path / "again.msh"
+    build_mesh(cfg, "4", "coarse", "quarter", again, tmp_path / "again.json")
+    digest = [hashlib.sha256(p.read_bytes()).hexdigest() for p in (msh, again)]
+    assert digest[0] == digest[1]
+    assert info["nodes"] == json.loads((tmp_path / "again.json").read_text())["nodes"]
+
+
+def test_sidecar_records_the_request(cfg, built):
+    from ureterfsi.provenance import config_hash
+
+    _, info, _ = built("3", "quarter")
+    assert (info["model"], info["level"], info["symmetry"], info["size_factor"]) == ("3", "coarse", "quarter", 1.0)
+    assert info["config_hash"] == config_hash(cfg)
+    assert 0 < info["quality_minSICN"]["min"] <= info["quality_minSICN"]["p01"] <= info["quality_minSICN"]["median"]
+    assert info["nodes"] > 0 and info["mesh_wall_time_s"] > 0 and info["gmsh_version"]
+
+
+@pytest.mark.parametrize("model,level,symmetry,match", [
+    ("2", "coarse", "axisymmetric", "not axisymmetric"),
+    ("1", "coarse", "eighth", "unknown symmetry"),
+    ("1", "ultrafine", "full", "unknown mesh level"),
+    ("7", "coarse", "full", "unknown model"),
+])
+def test_invalid_requests_raise(cfg, tmp_path, model, level, symmetry, match):
+    with pytest.raises(ValueError, match=match):
+        build_mesh(cfg, model, level, symmetry, tmp_path / "m.msh", tmp_path / "m.json")
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("key,value,match", [("hole_pair_spacing", 0.0004, "overlap"), ("holes", 5, "odd")])
+def test_invalid_hole_layout_raises(cfg, tmp_path, key, value, match):
+    bad = copy.deepcopy(cfg)
+    bad["models"]["2"][key] = value
+    with pytest.raises(ValueError, match=match):
+        build_mesh(bad, "2", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
