@@ -1,0 +1,380 @@
+"""Verification helpers shared by tests/test_verify_exact.py and benchmarks/convergence.py.
+
+Exact solutions (annular Poiseuille flow, plane-strain inflation of an incompressible five-parameter
+Mooney-Rivlin tube), error norms, observed orders of convergence, and the small scenes the
+verification problems are solved on (built on dolfinx rectangles or tiny gmsh models).
+SI units throughout.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from ureterfsi.fsi import (DirichletCondition, FluidRegion, LinearElastic, MooneyRivlin, NewtonianFluid,
+                           OpenBoundary, Scene, SolidRegion, SurfaceLoad)
+from ureterfsi.fsi.tagging import tag_cells, tag_facets
+
+
+# ------------------------------------------------------------------------------------------------
+# orders and norms
+# ------------------------------------------------------------------------------------------------
+def observed_order(h, e):
+    """Observed orders log(e_k / e_k+1) / log(h_k / h_k+1) between successive refinements
+    (h: mesh sizes or time steps, e: errors); an array one shorter than the inputs."""
+    h, e = np.asarray(h, dtype=float), np.asarray(e, dtype=float)
+    if h.shape != e.shape or h.size < 2:
+        raise ValueError("observed_order needs two equally long sequences of at least two values")
+    return np.log(e[:-1] / e[1:]) / np.log(h[:-1] / h[1:])
+
+
+def integrate(expr, mesh, weight=1.0, degree=8, dx=None):
+    """Global integral of a UFL expression times `weight` (e.g. 2 pi r in axisymmetric scenes)."""
+    measure = dx if dx is not None else ufl.dx(domain=mesh, metadata={"quadrature_degree": degree})
+    local = fem.assemble_scalar(fem.form(expr * weight * measure))
+    return mesh.comm.allreduce(local, op=MPI.SUM)
+
+
+def l2_error(uh, exact, weight=1.0, degree=8, mesh=None):
+    """(int |uh - exact|^2 weight)^(1/2) and (int |exact|^2 weight)^(1/2); `uh` a Function or a UFL
+    expression of one (then give `mesh`), `exact` a UFL expression."""
+    mesh = mesh if mesh is not None else uh.function_space.mesh
+    diff = uh - exact
+    err = integrate(ufl.inner(diff, diff), mesh, weight, degree)
+    ref = integrate(ufl.inner(exact, exact), mesh, weight, degree)
+    return math.sqrt(max(err, 0.0)), math.sqrt(max(ref, 0.0))
+
+
+# ------------------------------------------------------------------------------------------------
+# exact solutions
+# ------------------------------------------------------------------------------------------------
+def annular_poiseuille_velocity(r, R1, R2, G, mu, log=np.log):
+    """Axial velocity of steady flow between coaxial cylinders R1 < r < R2, no slip on both, driven by
+    the pressure gradient -dp/dz = G > 0 (flow towards +z):
+        mu (1/r) d/dr (r dv/dr) = -G,  v(R1) = v(R2) = 0
+        v(r) = G/(4 mu) [R2^2 - r^2 + (R2^2 - R1^2) ln(r/R2) / ln(R2/R1)].
+    `log` = ufl.ln gives the UFL expression of a SpatialCoordinate component."""
+    return G / (4.0 * mu) * (R2**2 - r**2 + (R2**2 - R1**2) * log(r / R2) / math.log(R2 / R1))
+
+
+def annular_poiseuille_flux(R1, R2, G, mu):
+    """Q = int_R1^R2 2 pi r v dr = pi G/(8 mu) [R2^4 - R1^4 - (R2^2 - R1^2)^2 / ln(R2/R1)]."""
+    return math.pi * G / (8.0 * mu) * (R2**4 - R1**4 - (R2**2 - R1**2) ** 2 / math.log(R2 / R1))
+
+
+def mooney_rivlin_plane_strain_stress_difference(lam, mat: MooneyRivlin):
+    """sigma_theta - sigma_r = lam dW/dlam for the incompressible plane-strain inflation, lam = r/R the hoop
+    stretch (principal stretches 1/lam, lam, 1). Plane strain gives I1 = I2 = lam^2 + lam^-2 + 1, so
+    W = c1 (I - 3) + c2 (I - 3)^2 with c1 = C10 + C01, c2 = C20 + C02 + C11, I - 3 = (lam - 1/lam)^2."""
+    c1, c2 = mat.c10 + mat.c01, mat.c20 + mat.c02 + mat.c11
+    s = (lam - 1.0 / lam) ** 2
+    return (c1 + 2.0 * c2 * s) * (2.0 * lam**2 - 2.0 / lam**2)
+
+
+def mooney_rivlin_tube_pressure(ri, Ri, Ro, mat: MooneyRivlin):
+    """Internal (Cauchy, deformed-configuration) pressure that inflates the incompressible tube to inner
+    radius ri in plane strain: r^2 = R^2 + (ri^2 - Ri^2); radial equilibrium d sigma_r/dr = (sigma_t - sigma_r)/r
+    with sigma_r(ri) = -p, sigma_r(ro) = 0 gives p = int_ri^ro (sigma_t - sigma_r) dr / r
+    = int_Ri^Ro (sigma_t - sigma_r)(lam) R / r^2 dR (r dr = R dR)."""
+    a = ri**2 - Ri**2
+    # the integrand is smooth on [Ri, Ro]: 64-point Gauss-Legendre is exact to rounding
+    xi, wq = np.polynomial.legendre.leggauss(64)
+    R = 0.5 * (Ro - Ri) * xi + 0.5 * (Ro + Ri)
+    r2 = R * R + a
+    f = mooney_rivlin_plane_strain_stress_difference(np.sqrt(r2) / R, mat) * R / r2
+    return float(0.5 * (Ro - Ri) * np.dot(wq, f))
+
+
+def mooney_rivlin_tube_inner_radius(Ri, Ro, mat: MooneyRivlin, pressure=None, dead_load=None):
+    """Deformed inner radius r_i of the plane-strain tube under either a follower `pressure` p (Cauchy,
+    on the deformed surface) or a radial `dead_load` p0 per reference area (P N = -p0 N on the inner
+    surface). By symmetry the dead load stays radial, and per unit length p0 Ri dTheta = p ri dtheta,
+    so it equals the follower pressure p = p0 Ri / ri; both are found by Brent's method."""
+    from scipy.optimize import brentq
+
+    if (pressure is None) == (dead_load is None):
+        raise ValueError("give exactly one of pressure, dead_load")
+    if pressure is not None:
+        f = lambda ri: mooney_rivlin_tube_pressure(ri, Ri, Ro, mat) - pressure  # noqa: E731
+    else:
+        f = lambda ri: mooney_rivlin_tube_pressure(ri, Ri, Ro, mat) - dead_load * Ri / ri  # noqa: E731
+    return brentq(f, Ri * (1.0 + 1e-12), 3.0 * Ri, xtol=1e-15 * Ri, rtol=1e-14)
+
+
+# ------------------------------------------------------------------------------------------------
+# materials of the verification problems (the study's numbers, config/config.yaml)
+# ------------------------------------------------------------------------------------------------
+URINE = NewtonianFluid(density=1050.0, dynamic_viscosity=1.3e-3)
+URETER_WALL = MooneyRivlin(c10=6.0e4, c01=2.0e4, c20=1.2e5, c02=2.0e4, c11=6.0e4, bulk_modulus=1.0e9,
+                           density=1040.0)
+STENT = LinearElastic(youngs_modulus=4.22e6, poisson_ratio=0.058, density=1261.1)
+REFERENCE_PRESSURE = 130.0
+
+
+def _near(a, b, tol):
+    return lambda x: np.isclose(a(x), b, atol=tol)
+
+
+# ------------------------------------------------------------------------------------------------
+# scenes
+# ------------------------------------------------------------------------------------------------
+def channel_scene(axisymmetric=False, wall=URETER_WALL, length=4e-3, fluid_width=4e-3, wall_thickness=1e-3,
+                  n_per_mm=2, normal_stress=REFERENCE_PRESSURE, fluid=URINE):
+    """Fluid channel 0 < y < fluid_width (plane, y = 0 a symmetry line) or fluid tube 0 < r < fluid_width
+    (axisymmetric, x = r, y = z: rotated so the axis is x = 0) under an elastic wall of wall_thickness,
+    both fluid ends open at `normal_stress`, wall ends clamped.
+
+    Plane: x along the channel, y across; axisymmetric: x = r across, y = z along. Tags: cells 1 fluid,
+    2 wall; facets 1 inlet, 2 outlet, 3 wall ends, 4 symmetry line/axis, 5 outer wall surface."""
+    W, H = fluid_width, fluid_width + wall_thickness
+    mm = 1e-3
+    tol = 1e-9
+    if axisymmetric:
+        n = (int(round(H / mm * n_per_mm)), int(round(length / mm * n_per_mm)))
+        mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([H, length])], n,
+                                      diagonal=dmesh.DiagonalType.crossed)
+        across, along = 0, 1
+    else:
+        n = (int(round(length / mm * n_per_mm)), int(round(H / mm * n_per_mm)))
+        mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([length, H])], n,
+                                      diagonal=dmesh.DiagonalType.crossed)
+        across, along = 1, 0
+    ct = tag_cells(mesh, {1: lambda x: x[across] < W, 2: lambda x: x[across] > W})
+    in_fluid = lambda x: x[across] < W + tol  # noqa: E731
+    ft = tag_facets(mesh, {
+        1: lambda x: np.isclose(x[along], 0.0, atol=tol) & in_fluid(x),
+        2: lambda x: np.isclose(x[along], length, atol=tol) & in_fluid(x),
+        3: lambda x: (np.isclose(x[along], 0.0, atol=tol) | np.isclose(x[along], length, atol=tol)) & ~in_fluid(x),
+        4: lambda x: np.isclose(x[across], 0.0, atol=tol),
+        5: lambda x: np.isclose(x[across], H, atol=tol),
+    })
+    dirichlet = [
+        DirichletCondition("velocity", [3]),
+        DirichletCondition("displacement", [1, 2, 3]),
+        DirichletCondition("velocity", [4], components=[across]),
+        DirichletCondition("displacement", [4], components=[across]),
+    ]
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], fluid),
+                 solids=[SolidRegion([2], wall)],
+                 open_boundaries=[OpenBoundary([1], normal_stress), OpenBoundary([2], normal_stress)],
+                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="channel-at-rest")
+
+
+@dataclass
+class Annulus:
+    R1: float = 1.0e-3          # m, inner cylinder (the stent's outer radius)
+    R2: float = 4.0e-3          # m, outer cylinder (the ureter's inner radius)
+    length: float = 3.0e-3      # m
+    p_in: float = 130.05        # Pa (Re = rho v_max (R2 - R1) / mu ~ 35)
+    p_out: float = 130.0        # Pa
+    fluid: NewtonianFluid = URINE
+
+    @property
+    def G(self):
+        """-dp/dz = (p_in - p_out) / L."""
+        return (self.p_in - self.p_out) / self.length
+
+    def velocity(self, r, log=np.log):
+        return annular_poiseuille_velocity(r, self.R1, self.R2, self.G, self.fluid.dynamic_viscosity, log)
+
+    def flux(self):
+        return annular_poiseuille_flux(self.R1, self.R2, self.G, self.fluid.dynamic_viscosity)
+
+
+def annulus_axisymmetric_scene(a: Annulus, n):
+    """r-z rectangle [R1, R2] x [0, L] with n cells across the gap (n * L/(R2 - R1) along); fluid only,
+    no slip on r = R1, R2, open ends at p_in (z = 0) and p_out (z = L) without backflow stabilisation
+    (the exact solution has inflow at z = 0), displacement fixed on every boundary.
+
+    The engine's open boundary prescribes the full traction sigma n = -f0 n (symmetric stress), while
+    Poiseuille flow has a shear traction sigma_rz = mu dv_z/dr on the end sections: the radial velocity
+    is therefore also set to zero there (parallel in- and outflow), which replaces the tangential part of
+    the condition; the normal part sigma_zz = -p + 2 mu dv_z/dz = -f0 is then exact.
+    Facets: 1 inlet, 2 outlet, 3 r = R1, 4 r = R2."""
+    gap = a.R2 - a.R1
+    nz = max(1, int(round(n * a.length / gap)))
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.array([a.R1, 0.0]), np.array([a.R2, a.length])], (n, nz),
+                                  diagonal=dmesh.DiagonalType.crossed)
+    tol = 1e-9
+    ct = tag_cells(mesh, {1: lambda x: np.full(x.shape[1], True)})
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[1], 0.0, atol=tol),
+                           2: lambda x: np.isclose(x[1], a.length, atol=tol),
+                           3: lambda x: np.isclose(x[0], a.R1, atol=tol),
+                           4: lambda x: np.isclose(x[0], a.R2, atol=tol)})
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], a.fluid),
+                 open_boundaries=[OpenBoundary([1], a.p_in, backflow=0.0), OpenBoundary([2], a.p_out, backflow=0.0)],
+                 dirichlet=[DirichletCondition("velocity", [3, 4]),
+                            DirichletCondition("velocity", [1, 2], components=[0]),
+                            DirichletCondition("displacement", [1, 2, 3, 4])],
+                 axisymmetric=True, name="annular-poiseuille")
+
+
+def annulus_3d_scene(a: Annulus, h):
+    """Short 3D annulus (gmsh OCC, second-order geometry), z along the axis; same conditions as the
+    axisymmetric scene (no slip, transverse velocity zero on the end sections, displacement fixed).
+    Facets: 1 inlet, 2 outlet, 3 r = R1, 4 r = R2."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("annulus")
+        occ = gmsh.model.occ
+        outer = occ.addCylinder(0, 0, 0, 0, 0, a.length, a.R2)
+        inner = occ.addCylinder(0, 0, 0, 0, 0, a.length, a.R1)
+        vol, _ = occ.cut([(3, outer)], [(3, inner)])
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [vol[0][1]], 1)
+        groups = {1: [], 2: [], 3: [], 4: []}
+        for dim, tag in gmsh.model.getBoundary(vol, oriented=False):
+            com = occ.getCenterOfMass(dim, tag)
+            if abs(com[2]) < 1e-9:
+                groups[1].append(tag)
+            elif abs(com[2] - a.length) < 1e-9:
+                groups[2].append(tag)
+            else:
+                bb = gmsh.model.getBoundingBox(dim, tag)
+                groups[3 if bb[3] < 0.5 * (a.R1 + a.R2) else 4].append(tag)
+        for t, surfs in groups.items():
+            gmsh.model.addPhysicalGroup(2, surfs, t)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+    finally:
+        gmsh.finalize()
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], a.fluid),
+                 open_boundaries=[OpenBoundary([1], a.p_in, backflow=0.0), OpenBoundary([2], a.p_out, backflow=0.0)],
+                 dirichlet=[DirichletCondition("velocity", [3, 4]),
+                            DirichletCondition("velocity", [1, 2], components=[0, 1]),
+                            DirichletCondition("displacement", [1, 2, 3, 4])],
+                 name="annular-poiseuille-3d")
+
+
+def quarter_annulus_mesh(Ri, Ro, h, order=2):
+    """Quarter annulus Ri < r < Ro, x, y >= 0 (gmsh, curved second-order geometry).
+    Facets: 1 inner arc, 2 outer arc, 3 x = 0 line, 4 y = 0 line; cells 1."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("quarter-annulus")
+        geo = gmsh.model.geo
+        c = geo.addPoint(0, 0, 0)
+        p1, p2, p3, p4 = (geo.addPoint(Ri, 0, 0), geo.addPoint(Ro, 0, 0), geo.addPoint(0, Ro, 0),
+                          geo.addPoint(0, Ri, 0))
+        bottom = geo.addLine(p1, p2)
+        outer = geo.addCircleArc(p2, c, p3)
+        left = geo.addLine(p3, p4)
+        inner = geo.addCircleArc(p4, c, p1)
+        surf = geo.addPlaneSurface([geo.addCurveLoop([bottom, outer, left, inner])])
+        geo.synchronize()
+        gmsh.model.addPhysicalGroup(2, [surf], 1)
+        for tag, curve in ((1, inner), (2, outer), (3, left), (4, bottom)):
+            gmsh.model.addPhysicalGroup(1, [curve], tag)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=2)
+    finally:
+        gmsh.finalize()
+    return mesh, ct, ft
+
+
+@dataclass
+class Tube:
+    Ri: float = 4.0e-3
+    Ro: float = 5.0e-3
+    material: MooneyRivlin = URETER_WALL
+
+
+def radial_dead_load(p0, ramp=None):
+    """Traction per reference area P N = -p0 g(t) N on the inner surface (N the outward normal of the
+    solid there, -e_R: the load pushes outward); `ramp(t)` a UFL-friendly time profile (default 1)."""
+    def traction(X, t, N):
+        amp = p0 if ramp is None else p0 * ramp(t)
+        return -amp * N
+    return traction
+
+
+def tube_scene(tube: Tube, h, p0, ramp=None, order=2):
+    """Plane-strain quarter tube, solid alone, radial dead load p0 on the inner arc, symmetry on x = 0
+    (u_x = v_x = 0) and y = 0 (u_y = v_y = 0), outer surface free."""
+    mesh, ct, ft = quarter_annulus_mesh(tube.Ri, tube.Ro, h, order)
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)],
+                 loads=[SurfaceLoad([1], radial_dead_load(p0, ramp))],
+                 dirichlet=[DirichletCondition("displacement", [3], components=[0]),
+                            DirichletCondition("velocity", [3], components=[0]),
+                            DirichletCondition("displacement", [4], components=[1]),
+                            DirichletCondition("velocity", [4], components=[1])],
+                 name="mooney-rivlin-tube")
+
+
+def tube_inner_radius(problem, tube: Tube):
+    """Mean deformed inner radius: (int_inner |X + u| dS) / (int_inner dS) on the reference inner arc."""
+    mesh = problem.mesh
+    u = problem.field("displacement")
+    X = ufl.SpatialCoordinate(mesh)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=problem.scene.facet_tags, metadata={"quadrature_degree": 8})
+    x = X + u
+    num = integrate(ufl.sqrt(ufl.dot(x, x)), mesh, dx=ds(1))
+    den = integrate(fem.Constant(mesh, 1.0), mesh, dx=ds(1))
+    return num / den
+
+
+def dofs_count(problem):
+    return problem.W.dofmap.index_map.size_global * problem.W.dofmap.index_map_bs
+
+
+def pure_displacement_tube_inner_radius(tube: Tube, h, p0, degree=1, order=2, load_steps=4):
+    """Contrast to the engine's mixed u-pi formulation: the same plane-strain tube and dead load solved in
+    pure displacement form, W = W_iso + kappa/2 (J - 1)^2 with Lagrange-`degree` displacement (dolfinx
+    Newton). With kappa/(C10 + C01) ~ 1e4 this locks: the returned inner radius is far too small."""
+    from dolfinx.fem.petsc import NonlinearProblem
+    from dolfinx.nls.petsc import NewtonSolver
+
+    from ureterfsi.fsi import physics
+    from ureterfsi.fsi.operators import Operators
+
+    mesh, ct, ft = quarter_annulus_mesh(tube.Ri, tube.Ro, h, order)
+    ops = Operators(mesh)
+    V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    u, phi = fem.Function(V), ufl.TestFunction(V)
+    F = ufl.variable(physics.deformation_gradient(ops, u))
+    J = ufl.det(F)
+    mat = tube.material
+    W = physics.mooney_rivlin_isochoric_energy(ops, mat, F) + 0.5 * mat.bulk_modulus * (J - 1.0) ** 2
+    P = ufl.diff(W, F)
+    md = {"quadrature_degree": 4}
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft, metadata=md)
+    N = ufl.FacetNormal(mesh)
+    load = fem.Constant(mesh, 0.0)
+    R = ufl.inner(P, ufl.grad(phi)) * ufl.dx(metadata=md) + load * ufl.dot(N, phi) * ds(1)
+    fdim = mesh.topology.dim - 1
+    bcs = []
+    for tag, comp in ((3, 0), (4, 1)):
+        sub = V.sub(comp)
+        collapsed, _ = sub.collapse()
+        dofs = fem.locate_dofs_topological((sub, collapsed), fdim, ft.find(tag))
+        bcs.append(fem.dirichletbc(fem.Function(collapsed), dofs, sub))
+    solver = NewtonSolver(mesh.comm, NonlinearProblem(R, u, bcs))
+    solver.convergence_criterion = "incremental"
+    solver.rtol, solver.atol, solver.max_it = 1e-10, 1e-14, 50
+    for s in range(1, load_steps + 1):
+        load.value = p0 * s / load_steps
+        solver.solve(u)
+    X = ufl.SpatialCoordinate(mesh)
+    x = X + u
+    num = integrate(ufl.sqrt(ufl.dot(x, x)), mesh, dx=ds(1))
+    den = integrate(fem.Constant(mesh, 1.0), mesh, dx=ds(1))
+    return num / den
