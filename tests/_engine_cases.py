@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import ufl
-from dolfinx import fem
+from dolfinx import fem, graph
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
@@ -52,11 +52,43 @@ class TubeCase:
         return self.scene.mesh
 
 
-def tube_mesh(comm=MPI.COMM_WORLD, n_fluid=4, n_wall=2, n_axial=40):
-    """Structured triangle mesh of [0, R_o] x [0, L] with a mesh line at r = R_i."""
+def tube_mesh(comm=MPI.COMM_WORLD, n_fluid=4, n_wall=2, n_axial=40, partition=None):
+    """Structured triangle mesh of [0, R_o] x [0, L] with a mesh line at r = R_i.
+
+    partition=None: the default partitioner (shared-facet ghosts). partition="interface": an
+    adversarial split along the fluid-solid interface (fluid cells on rank 0, wall cells on the last
+    rank) with shared-facet ghosts; "interface-noghost": the same without ghost cells, so every
+    interface dof sees its fluid cells on one process and its solid cells on another."""
     nr = n_fluid + n_wall
-    mesh = dmesh.create_rectangle(comm, [np.array([0.0, 0.0]), np.array([1.0, 1.0])], [nr, n_axial],
-                                  dmesh.CellType.triangle, diagonal=dmesh.DiagonalType.right)
+    corners = [np.array([0.0, 0.0]), np.array([1.0, 1.0])]
+    if partition is None:
+        mesh = dmesh.create_rectangle(comm, corners, [nr, n_axial], dmesh.CellType.triangle,
+                                      diagonal=dmesh.DiagonalType.right)
+    elif partition in ("interface", "interface-noghost"):
+        def partitioner(comm_, nparts, tdim, cells, ghost_mode):
+            # dolfinx 0.5 always asks for facet ghosts (it finds the shared vertices through them):
+            # links of cell c = [owner, owners of the cells across its facets (if different)].
+            # create_rectangle numbers vertex (ix, iy) as iy (nr + 1) + ix.
+            a = cells.array.reshape(-1, 3)
+            owner = np.where((a % (nr + 1)).mean(axis=1) < n_fluid, 0, nparts - 1).astype(np.int32)
+            facets = {}
+            for c, verts in enumerate(a):
+                for i in range(3):
+                    facets.setdefault(tuple(sorted(np.delete(verts, i))), []).append(c)
+            links = [[o] for o in owner]
+            for pair in facets.values():
+                if len(pair) == 2 and owner[pair[0]] != owner[pair[1]]:
+                    links[pair[0]].append(owner[pair[1]])
+                    links[pair[1]].append(owner[pair[0]])
+            links = [sorted(set(l), key=lambda r, o=l[0]: r != o) for l in links]
+            offsets = np.cumsum([0] + [len(l) for l in links]).astype(np.int32)
+            data = np.array([r for l in links for r in l], dtype=np.int32)
+            return graph.create_adjacencylist(data, offsets)
+        ghosts = dmesh.GhostMode.none if partition == "interface-noghost" else dmesh.GhostMode.shared_facet
+        mesh = dmesh.create_rectangle(comm, corners, [nr, n_axial], dmesh.CellType.triangle,
+                                      ghosts, partitioner, dmesh.DiagonalType.right)
+    else:
+        raise ValueError(f"partition: None, 'interface' or 'interface-noghost', got {partition!r}")
     x = mesh.geometry.x
     s = x[:, 0].copy()
     sf = n_fluid / nr
@@ -65,8 +97,8 @@ def tube_mesh(comm=MPI.COMM_WORLD, n_fluid=4, n_wall=2, n_axial=40):
     return mesh
 
 
-def tube_case(comm=MPI.COMM_WORLD, n_fluid=4, n_wall=2, n_axial=40, backflow=1.0) -> TubeCase:
-    mesh = tube_mesh(comm, n_fluid, n_wall, n_axial)
+def tube_case(comm=MPI.COMM_WORLD, n_fluid=4, n_wall=2, n_axial=40, backflow=1.0, partition=None) -> TubeCase:
+    mesh = tube_mesh(comm, n_fluid, n_wall, n_axial, partition)
     tol = 1e-9
     ct = tag_cells(mesh, {FLUID: lambda x: x[0] < R_I, WALL: lambda x: x[0] > R_I})
     ft = tag_facets(mesh, {

@@ -27,10 +27,12 @@ def main(argv=None):
     ap.add_argument("output")
     ap.add_argument("--steps", type=int, default=6)
     ap.add_argument("--dt", type=float, default=0.005)
+    ap.add_argument("--partition", default=None, choices=[None, "interface", "interface-noghost"],
+                    help="'interface': fluid on rank 0, wall on the last rank ('-noghost': without ghost cells)")
     args = ap.parse_args(argv)
     comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
-    pb, case = tube_problem(comm)
+    pb, case = tube_problem(comm, partition=args.partition)
     obs = QoIObserver(Quantities(pb))
     t_setup = time.perf_counter() - t0
     records = TimeIntegrator(pb, TimeSettings(end=args.steps * args.dt, dt=args.dt), [obs]).run()
