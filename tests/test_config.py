@@ -97,6 +97,12 @@ BAD = [
     ("peristalsis.start_position", 0.06, "peristalsis.start_position", "got 0.06"),
     ("ureter.bulk_modulus", 5.0e5, "ureter.bulk_modulus", "near-incompressibility"),
     ("ureter.c10", -3.0e4, "ureter.c10", "2(c10 + c01) must be > 0"),
+    # ---- study and figures
+    ("study.level", "finest", "study.level", "must be one of mesh.levels"),
+    ("study.convergence_model", "7", "study.convergence_model", "must be one of models"),
+    ("study.convergence_time", 1.25, "study.convergence_time", "time.probe_times"),
+    ("figures.formats", ["jpg"], "figures.formats[0]", "jpg"),
+    ("figures.dpi", 10, "figures.dpi", "10"),
 ]
 
 
@@ -137,6 +143,7 @@ def test_first_error_is_deterministic(cfg):
 def test_axisymmetric_allowed_without_stents(cfg):
     cfg["models"] = {"1": cfg["models"]["1"]}
     cfg["mesh"]["symmetry"] = "axisymmetric"
+    cfg["study"]["convergence_model"] = "1"
     validate_config(cfg)
 
 

@@ -357,10 +357,23 @@ def check_ureter_material(cfg):
                           f"got {_fmt(u['bulk_modulus'])} Pa = {ratio:.3g} (c10 + c01)")
 
 
+def check_study(cfg):
+    st = cfg["study"]
+    if st["level"] not in cfg["mesh"]["levels"]:
+        raise ConfigError("study.level", f"must be one of mesh.levels {sorted(cfg['mesh']['levels'])}, "
+                                         f"got {_fmt(st['level'])}")
+    if st["convergence_model"] not in cfg["models"]:
+        raise ConfigError("study.convergence_model", f"must be one of models {sorted(cfg['models'])}, "
+                                                     f"got {_fmt(st['convergence_model'])}")
+    if not any(abs(st["convergence_time"] - t) < 1e-12 for t in cfg["time"]["probe_times"]):
+        raise ConfigError("study.convergence_time", f"must be one of time.probe_times "
+                                                    f"{_fmt(cfg['time']['probe_times'])}, got {_fmt(st['convergence_time'])}")
+
+
 CHECKS = (
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
-    check_symmetry, check_peristalsis, check_ureter_material,
+    check_symmetry, check_peristalsis, check_ureter_material, check_study,
 )
 
 

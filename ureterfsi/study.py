@@ -52,7 +52,8 @@ def solver_options(cfg: dict) -> SolverOptions:
     s = cfg["solver"]
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
-                         newton_max_iterations=s["newton_max_iterations"], linear_solver=s["linear_solver"])
+                         newton_max_iterations=s["newton_max_iterations"], linear_solver=s["linear_solver"],
+                         reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"])
 
 
 class UreterProbes(Observer):
@@ -245,8 +246,9 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
                           probe_time=_cf(xr.DataArray(np.asarray(obs.snapshot_times), dims="probe_time"),
                                          "probe_time"))
     for name in obs.snapshot_names():
-        data = np.asarray(obs.snapshots[name]).reshape(len(obs.snapshot_times), -1)
         dim = "hole_offset" if name == "hole_velocity_y" else "z"
+        width = len(obs.hole_s) if dim == "hole_offset" else len(obs.z)
+        data = np.asarray(obs.snapshots[name], dtype=float).reshape(len(obs.snapshot_times), width)
         ds[name] = _cf(xr.DataArray(data, dims=("probe_time", dim)), name)
     if obs.has_stent:
         ds = ds.assign_coords(hole_offset=_cf(xr.DataArray(obs.hole_s, dims="hole_offset"), "hole_offset"),

@@ -164,7 +164,8 @@ class MonolithicFSI:
         pc.setType("lu")
         pc.setFactorSolverType(opts.linear_solver)
         self._jacobian_valid = False
-        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise_solve": 0.0}
+        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0}
+        self.counters = {"factorisations": 0, "reused_solves": 0}
         self.min_jacobian_expr = None
         if fluid_tags:
             self._setup_ale_jacobian(u, fluid_tags)
@@ -341,12 +342,14 @@ class MonolithicFSI:
             if it == o.newton_max_iterations:
                 break
             contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            if not (o.reuse_jacobian and self._jacobian_valid and contraction < o.reuse_contraction):
+            fresh = not (o.reuse_jacobian and self._jacobian_valid and contraction < o.reuse_contraction)
+            if fresh:
                 self._assemble_jacobian()
                 self.ksp.setOperators(self.A)
             t0 = _time.perf_counter()
             self.ksp.solve(self.b, self.dx_vec)
-            self.timings["factorise_solve"] += _time.perf_counter() - t0
+            self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
+            self.counters["factorisations" if fresh else "reused_solves"] += 1
             self.x.vector.axpy(-1.0, self.dx_vec)
             self.x.x.scatter_forward()
             if self.dx_vec.norm() <= o.newton_stol * max(self.x.vector.norm(), 1e-300):
