@@ -86,6 +86,7 @@ class TimeIntegrator:
         with atomic_path(self._checkpoint_file()) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, x=pb.x.x.array, x_n=pb.x_n.x.array, x_nm1=pb.x_nm1.x.array,
+                         cells=np.asarray(pb.mesh.topology.original_cell_index),
                          meta=np.array(json.dumps(meta)))
         log.info("checkpoint: step %d t=%.6g s -> %s", step, pb.time, self._checkpoint_file())
 
@@ -101,6 +102,13 @@ class TimeIntegrator:
         if data["x"].shape != pb.x.x.array.shape:
             raise SolveFailure(f"checkpoint {self._checkpoint_file()} does not match this problem "
                                f"({data['x'].shape} vs {pb.x.x.array.shape} values): delete it to restart")
+        # The arrays are in process-local numbering. In parallel the graph partitioner need not give
+        # the same cells to the same rank in two runs (same sizes, different layout): loading would
+        # scramble the state (NaN residuals or a silently wrong state). Refuse instead.
+        if "cells" in data and not np.array_equal(data["cells"], np.asarray(pb.mesh.topology.original_cell_index)):
+            raise SolveFailure(f"checkpoint {self._checkpoint_file()} was written with a different mesh "
+                               f"partition (the partitioner is not reproducible between parallel runs); "
+                               f"its process-local arrays cannot be restored: delete it to restart")
         pb.x.x.array[:], pb.x_n.x.array[:], pb.x_nm1.x.array[:] = data["x"], data["x_n"], data["x_nm1"]
         meta = json.loads(str(data["meta"]))
         pb.time, pb.dt_prev = meta["time"], meta["dt_prev"]
