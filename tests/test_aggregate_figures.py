@@ -1,0 +1,306 @@
+"""Study datasets and figures from synthetic per-run datasets with the exact structure of
+ureterfsi.study.probes_dataset and known analytic values (outlet flux = A sin(t), ...)."""
+from __future__ import annotations
+
+import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
+import copy
+import json
+from types import SimpleNamespace
+
+import matplotlib
+import numpy as np
+import pytest
+import xarray as xr
+
+from ureterfsi import aggregate, plotting
+from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.study import CF, HOLE_FRACTION, N_HOLE, N_LINE, RunSpec, UreterProbes, probes_dataset
+
+FLUX_AMPLITUDE = 1e-8         # m^3/s
+VM_BASE = 5e3                 # Pa
+
+
+class _SyntheticProbes:
+    """Stand-in for UreterProbes with analytic series/snapshots (same names, shapes, attributes)."""
+
+    series_names = UreterProbes.series_names
+    snapshot_names = UreterProbes.snapshot_names
+
+    def __init__(self, cfg, model, symmetry, times, level_factor=1.0):
+        g = UreterGeometry.from_config(cfg)
+        sm = StentModel.from_config(cfg, model)
+        self.has_stent = sm.stent and symmetry != "axisymmetric"
+        self.z = np.linspace(0.0, g.length, N_LINE)
+        k = int(model)
+        t = np.asarray(times)
+        zc = cfg["peristalsis"]["start_position"] + cfg["peristalsis"]["speed"] * t
+        self.series = {"time": list(t),
+                       "outlet_flux": list(FLUX_AMPLITUDE * np.sin(t) * (1 + 0.05 * k)),
+                       "inlet_flux": list(FLUX_AMPLITUDE * np.cos(t)),
+                       "outlet_mean_axial_velocity": list(1e-3 * np.sin(2 * np.pi * t / 3) * (1 + 0.05 * k)),
+                       "fluid_volume": list(np.full_like(t, 3e-6)),
+                       "max_wall_displacement": list(1e-3 * np.ones_like(t))}
+        self.snapshot_times = [pt for pt in cfg["time"]["probe_times"] if pt <= t[-1] + 1e-9]
+        wall = [1e-3 * np.exp(-0.5 * ((self.z - (cfg["peristalsis"]["speed"] * pt)) / 4.25e-3) ** 2)
+                * (1 - 0.03 * k) for pt in self.snapshot_times]
+        self.snapshots = {"wall_radial_displacement": [w.tolist() for w in wall]}
+        if self.has_stent:
+            self.hole_z = hole_pair_positions(g, sm)
+            sides = [1.0] if symmetry == "quarter" else [1.0, -1.0]
+            self.holes = [(zk, sd) for zk in self.hole_z for sd in sides]
+            self.hole_s = np.linspace(-g.hole_radius, g.hole_radius, N_HOLE)
+            self.outlet_hole_z = float(self.hole_z.max())
+            vm = VM_BASE * (1 + 0.2 * np.sin(2 * np.pi * t / 3)) * (1 + 0.1 * k)
+            self.series["stent_max_von_mises"] = list(vm)
+            for c in "xy":
+                self.series[f"stent_max_von_mises_{c}"] = list(np.full_like(t, 1e-3))
+            self.series["stent_max_von_mises_z"] = list(np.clip(zc, 0, g.length))
+            self.series["hole_flux"] = [[1e-10 * np.sin(2 * np.pi * (ti - zk / 0.02) / 3) for zk, _ in self.holes]
+                                        for ti in t]
+            a = g.hole_radius
+            self.snapshots["stent_von_mises_line"] = [
+                (VM_BASE * level_factor * (1 + 0.3 * np.exp(-0.5 * ((self.z - 0.02 * pt) / 5e-3) ** 2))).tolist()
+                for pt in self.snapshot_times]
+            self.snapshots["hole_velocity_y"] = [(1e-3 * k * (1 + pt) * (1 - (self.hole_s / a) ** 2)).tolist()
+                                                 for pt in self.snapshot_times]
+
+
+def synthetic_run(cfg, model, level="coarse", symmetry="quarter", end=3.0, dt=0.01, refine=None,
+                  level_factor=1.0, cells=1000, wall_time=10.0) -> xr.Dataset:
+    """A per-run dataset built by the study's own probes_dataset from analytic probe values.
+
+    refine=(t0, t1): halved steps in [t0, t1] (an adaptive time grid)."""
+    t = np.round(np.arange(dt, end + 0.5 * dt, dt), 9)
+    if refine:
+        extra = np.arange(refine[0] + dt / 2, refine[1], dt)
+        t = np.unique(np.round(np.r_[t, extra], 9))
+    obs = _SyntheticProbes(cfg, model, symmetry, t, level_factor)
+    records = [SimpleNamespace(time=ti, dt=dt, newton_iterations=3, residual=1e-9, min_ale_jacobian=0.9,
+                               wall_time=0.1) for ti in t]
+    spec = RunSpec(str(model), level, symmetry, "mesh.msh")
+    return probes_dataset(obs, records, cfg, spec, {"cells": cells, "dofs": 10 * cells, "processes": 1,
+                                                    "wall_time_s": wall_time, "time_step_s": dt,
+                                                    "end_time_s": end})
+
+
+@pytest.fixture
+def runs(tmp_path, cfg):
+    """Per-run files of the four models (model 3 with an adaptive step refinement, model 1 axisymmetric)."""
+    paths = []
+    for m in cfg["models"]:
+        sym = "axisymmetric" if m == "1" else "quarter"
+        ds = synthetic_run(cfg, m, symmetry=sym, refine=(1.0, 1.2) if m == "3" else None)
+        p = tmp_path / "runs" / sym / f"model{m}_coarse.nc"
+        p.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(p)
+        paths.append(p)
+    return paths
+
+
+@pytest.fixture
+def level_runs(tmp_path, cfg):
+    paths = []
+    for i, (lv, n) in enumerate(zip(cfg["mesh"]["levels"], (60000, 140000, 320000))):
+        p = tmp_path / "conv" / f"model3_{lv}.nc"
+        p.parent.mkdir(parents=True, exist_ok=True)
+        synthetic_run(cfg, "3", level=lv, end=1.6, level_factor=1 + 0.1 / (i + 1), cells=n).to_netcdf(p)
+        paths.append(p)
+    return paths[::-1]    # deliberately not in config order
+
+
+def _check_cf(ds):
+    for name, var in ds.variables.items():
+        assert "units" in var.attrs and "long_name" in var.attrs, name
+
+
+def test_synthetic_run_has_probe_structure(cfg):
+    ds = synthetic_run(cfg, "2")
+    assert set(ds.dims) == {"time", "probe_time", "z", "hole_offset", "hole", "step"}
+    assert ds.attrs["model"] == "2" and ds.attrs["symmetry"] == "quarter"
+    assert ds.sizes["hole"] == 11   # quarter model: one hole per pair
+    assert HOLE_FRACTION["quarter"] == 0.5
+    for v in ds.data_vars:
+        assert v in CF
+
+
+def test_combine_models(runs, cfg, tmp_path):
+    ds = aggregate.combine_models(runs, cfg)
+    assert list(ds["model"].values) == ["1", "2", "3", "4"]
+    assert list(ds["model_label"].values) == ["No stent", "5 mm", "10 mm", "25 mm"]
+    _check_cf(ds)
+    assert ds["outlet_flux"].attrs["units"] == "m3 s-1"
+    # union grid: every step time of every run; model 3's halved steps are in it
+    assert 1.005 in np.round(ds["time"].values, 9)
+    assert "union" in ds.attrs["time_grid_description"] and ds.attrs["time_interpolation"] == "linear"
+    # linear interpolation of the other models onto model 3's extra times
+    t = ds["time"].values
+    sel = (t > 1.0) & (t < 1.2)
+    q2 = ds["outlet_flux"].sel(model="2").values[sel]
+    exact = FLUX_AMPLITUDE * np.sin(t[sel]) * 1.1
+    np.testing.assert_allclose(q2, exact, rtol=1e-4)
+    mid = FLUX_AMPLITUDE * 1.1 * 0.5 * (np.sin(1.0) + np.sin(1.01))
+    np.testing.assert_allclose(ds["outlet_flux"].sel(model="2", time=1.005).item(), mid, rtol=1e-12)
+    np.testing.assert_allclose(ds["outlet_flux"].sel(model="3").values, FLUX_AMPLITUDE * np.sin(t) * 1.15,
+                               rtol=1e-12)
+    # stent-only variables: NaN for model 1
+    for v in ("stent_max_von_mises", "hole_flux", "stent_von_mises_line", "hole_velocity_y"):
+        assert np.isnan(ds[v].sel(model="1").values).all(), v
+        assert np.isfinite(ds[v].sel(model="3").values).any(), v
+    # holes padded to the largest count, positions per model
+    assert ds.sizes["hole"] == 11
+    assert np.isfinite(ds["hole_z"].sel(model="4").values).sum() == 3
+    assert ds["outlet_hole_z"].sel(model="3").item() == pytest.approx(0.04875)
+    assert ds.attrs["run_3_symmetry"] == "quarter" and ds.attrs["run_1_symmetry"] == "axisymmetric"
+    assert "run_2_config_hash" in ds.attrs and "run_2_wall_time_s" in ds.attrs
+    out = tmp_path / "models_coarse.nc"
+    aggregate.write_dataset(ds, out)
+    back = xr.open_dataset(out)
+    assert back["model_label"].values.tolist() == ["No stent", "5 mm", "10 mm", "25 mm"]
+    back.close()
+
+
+def test_combine_models_nominal_grid_and_errors(runs, cfg):
+    ds = aggregate.combine_models(runs, cfg, time_grid="nominal")
+    assert ds.sizes["time"] == 301 and np.isnan(ds["outlet_flux"].isel(time=0)).all()   # runs start at dt
+    with pytest.raises(ValueError, match="two runs"):
+        aggregate.combine_models(runs + runs[:1], cfg)
+
+
+def test_combine_levels(level_runs, cfg, tmp_path):
+    ds = aggregate.combine_levels(level_runs, 1.5, cfg)
+    assert list(ds["level"].values) == list(cfg["mesh"]["levels"])
+    assert ds["stent_von_mises_line"].dims == ("level", "z")
+    assert ds["cells"].values.tolist() == [60000, 140000, 320000]
+    _check_cf(ds)
+    expected = VM_BASE * (1 + 0.1) * (1 + 0.3 * np.exp(-0.5 * ((ds["z"].values - 0.03) / 5e-3) ** 2))
+    np.testing.assert_allclose(ds["stent_von_mises_line"].sel(level="coarse").values, expected, rtol=1e-12)
+    assert ds["line_max_difference_to_finest"].sel(level="fine").item() == 0.0
+    assert ds["peak_outlet_flux"].sel(level="fine").item() == pytest.approx(FLUX_AMPLITUDE * 1.15, rel=1e-3)
+    with pytest.raises(ValueError, match="no probe"):
+        aggregate.combine_levels(level_runs, 0.7, cfg)
+    aggregate.write_dataset(ds, tmp_path / "conv.nc")
+    assert (tmp_path / "conv.nc").stat().st_size > 0
+
+
+def _legend_texts(fig):
+    out = []
+    for ax in fig.axes:
+        if ax.get_legend():
+            out += [t.get_text() for t in ax.get_legend().get_texts()]
+    out += [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    return out
+
+
+def _saved(fig, tmp_path, stem):
+    paths = plotting.figure_paths(tmp_path / "fig" / stem, ["png", "pdf"])
+    plotting.save_figure(fig, paths, dpi=60)
+    for p in paths:
+        assert p and __import__("os").path.getsize(p) > 0
+    assert not [p for p in (tmp_path / "fig").iterdir() if p.name.startswith(".")]   # no temp files left
+
+
+def test_figures_from_models(runs, cfg, tmp_path):
+    ds = aggregate.combine_models(runs, cfg)
+    fig = plotting.fig04_outlet_flow(ds)
+    assert fig.axes[0].get_ylabel().endswith("(mm/s)") and fig.axes[1].get_ylabel() == "outlet flow rate (mm³/s)"
+    assert _legend_texts(fig) == ["No stent", "5 mm", "10 mm", "25 mm"]
+    # plotted in scaled units
+    np.testing.assert_allclose(fig.axes[1].lines[1].get_ydata(), ds["outlet_flux"].sel(model="2") * 1e9)
+    _saved(fig, tmp_path, "fig04")
+
+    fig = plotting.fig05_wall_displacement(ds)
+    assert [ax.get_title() for ax in fig.axes] == ["t = 0.5 s", "t = 1 s", "t = 2 s", "t = 2.5 s"]
+    assert fig.axes[0].get_ylabel() == "radial wall\ndisplacement (mm)"
+    assert "No stent" in _legend_texts(fig) and "pulse centre" in _legend_texts(fig)
+    _saved(fig, tmp_path, "fig05")
+
+    for stem, t in plotting.HOLE_FIGURES.items():
+        fig = plotting.fig_hole_velocity(ds, t)
+        assert _legend_texts(fig) == ["5 mm", "10 mm", "25 mm"]
+        assert fig.axes[0].get_xlabel() == "axial distance from the hole centre (mm)"
+        assert fig.axes[0].get_ylabel() == "y-velocity (mm/s)"
+        _saved(fig, tmp_path, stem)
+
+    fig = plotting.fig10_stent_von_mises(ds)
+    assert _legend_texts(fig) == ["5 mm", "10 mm", "25 mm"]
+    assert fig.axes[0].get_ylabel() == "maximum von Mises stress (kPa)"
+    _saved(fig, tmp_path, "fig10")
+
+    fig = plotting.fig_hole_flux(ds)
+    assert [ax.get_title(loc="left").split(" (")[0] for ax in fig.axes[:3]] == ["5 mm", "10 mm", "25 mm"]
+    assert fig.axes[0].get_ylabel() == "hole flux (mm³/s)"
+    assert len(fig.axes[0].lines) == 11 + 1
+    _saved(fig, tmp_path, "fig11")
+
+
+def test_figure_convergence(level_runs, cfg, tmp_path):
+    conv = aggregate.combine_levels(level_runs, 1.5, cfg)
+    fig = plotting.fig03_mesh_convergence(conv)
+    assert _legend_texts(fig) == ["coarse (60 000 elements)", "medium (140 000 elements)", "fine (320 000 elements)"]
+    assert fig.axes[0].get_ylabel() == "von Mises stress (kPa)"
+    _saved(fig, tmp_path, "fig03")
+
+
+def _tiny_mesh(cfg, tmp_path, symmetry):
+    from ureterfsi.mesh import build_mesh
+
+    c = copy.deepcopy(cfg)
+    c["geometry"]["length"] = 0.01
+    c["models"]["3"]["holes"] = 4   # pairs at 1.25 mm and 8.75 mm of a 10 mm segment
+    c["mesh"]["sizes"] = {"hole": 2.5e-4, "stent_wall": 5e-4, "ureter_wall": 1e-3, "fluid_bulk": 2e-3}
+    c["mesh"]["optimize"] = False
+    msh, js = tmp_path / f"m3_{symmetry}.msh", tmp_path / f"m3_{symmetry}.json"
+    build_mesh(c, "3", "coarse", symmetry, msh, js)
+    return msh, json.loads(js.read_text())
+
+
+@pytest.mark.parametrize("symmetry", ["quarter", "full"])
+def test_figure_domain(cfg, tmp_path, symmetry):
+    msh, info = _tiny_mesh(cfg, tmp_path, symmetry)
+    fig = plotting.fig02_domain(msh, hole_z=max(info["hole_pair_z"]))
+    ax, axz = fig.axes[:2]
+    assert ax.get_xlabel() == "z (mm)" and ax.get_ylabel() == "y (mm)"
+    assert _legend_texts(fig) == ["Urine", "Ureter", "Stent"]
+    faces = ax.collections[0].get_facecolors()
+    # every region is present among the drawn facets
+    for t in (1, 2, 3):
+        rgba = matplotlib.colors.to_rgba(plotting.REGION_COLORS[t])
+        assert np.isclose(faces, rgba).all(axis=1).any(), t
+    assert "outlet-most" in axz.get_title()
+    _saved(fig, tmp_path, f"fig02_{symmetry}")
+
+
+def test_facet_regions_hole_channel_is_fluid(cfg, tmp_path):
+    """In the mirror plane x = 0 the hole channels (stent radii, near a hole centre) are urine."""
+    msh, info = _tiny_mesh(cfg, tmp_path, "quarter")
+    coords, cells, sym, dim = plotting._read_msh(msh)
+    reg = plotting._facet_regions(cells, sym)
+    assert (reg > 0).all()
+    c = coords[sym].mean(axis=1)
+    g = UreterGeometry.from_config(cfg)
+    in_wall = (c[:, 1] > g.stent_inner_radius) & (c[:, 1] < g.stent_outer_radius)
+    near_hole = np.abs(c[:, 2] - 0.00875) < 0.5 * g.hole_radius
+    far = np.abs(c[:, 2] - 0.005) < 1e-3
+    assert (reg[in_wall & near_hole] == 1).all() and (reg[in_wall & near_hole] == 1).any()
+    assert (reg[in_wall & far] == 3).all()
+
+
+def test_table1(cfg, tmp_path):
+    sidecars = []
+    for m in cfg["models"]:
+        p = tmp_path / f"model{m}.json"
+        sm = StentModel.from_config(cfg, m)
+        z = hole_pair_positions(UreterGeometry.from_config(cfg), sm).tolist()
+        p.write_text(json.dumps({"model": m, "level": "coarse", "symmetry": "quarter", "cells_total": 1000 * int(m),
+                                 "cells": {"fluid": 500, "ureter": 400} | ({"stent": 100} if sm.stent else {}),
+                                 "hole_pair_z": z, "hole_channels_found": len(z)}))
+        sidecars.append(p)
+    rows = plotting.table1(cfg, sidecars)
+    assert [r["label"] for r in rows] == ["No stent", "5 mm", "10 mm", "25 mm"]
+    assert [r["side_holes"] for r in rows] == [0, 22, 12, 6]
+    assert rows[2]["hole_pairs_z_mm"] == "1.25 10 20 30 40 48.75"
+    assert rows[0]["elements_stent"] == 0
+    plotting.write_table(rows, tmp_path / "t.csv", tmp_path / "t.md")
+    assert (tmp_path / "t.csv").read_text().splitlines()[0].startswith("model,label,hole_pair_spacing_mm")
+    md = (tmp_path / "t.md").read_text().splitlines()
+    assert len(md) == 6 and "| 3 | 10 mm | 10.0 | 12 |" in md[4]

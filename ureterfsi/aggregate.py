@@ -1,0 +1,284 @@
+"""Study datasets: per-run probe files (ureterfsi.study) combined across models and across mesh levels.
+
+combine_models  runs of one mesh level, new dim `model` ("1".."4", with a `model_label` coordinate as in
+                Table 1). Runs may have different time grids (step halving); every time series is put on
+                the union of the runs' step times by linear interpolation (NaN outside a run's own time
+                range), recorded in the dataset attrs. Variables that exist only in stented runs are NaN
+                for the stent-free model. Per-hole variables are padded to the largest hole count
+                (`hole_z`, `hole_side` become (model, hole) coordinates, NaN where a model has fewer
+                holes); per-step solver records are padded along `step`.
+combine_levels  the mesh-convergence study (paper §3.1, Fig. 3): dim `level` ordered as in the config,
+                the stent probe-line von Mises stress at one probe time, and per-level scalars.
+
+Every variable carries CF `units` and `long_name`; the datasets carry provenance_attrs, the provenance
+of every input run (attrs `run_<model>_*` / `run_<level>_*`) and are written atomically.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+# netCDF4 before anything that loads dolfinx: with dolfinx's (MPI) HDF5 loaded first, netCDF4's bundled
+# HDF5 segfaults on the first file write (PETSc SEGV handler, MPI_ABORT 59).
+import netCDF4  # noqa: F401,I001
+import numpy as np
+import xarray as xr
+
+from .provenance import atomic_path, provenance_attrs
+from .study import CF
+
+DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
+TIME_DECIMALS = 9            # times equal to 1 ns are the same instant (probe times, union grid)
+# run attrs that are not copied per run (dataset-level metadata of the run file)
+_SKIP_RUN_ATTRS = ("Conventions", "title")
+
+EXTRA_CF = {
+    "model": ("1", "stent model number (paper Table 1)"),
+    "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),
+    "level": ("1", "mesh level (config mesh.levels)"),
+    "step": ("1", "index of the accepted time step"),
+    "hole": ("1", "index of the side hole, by axial position"),
+    "cells": ("1", "number of cells of the mesh"),
+    "dofs": ("1", "number of degrees of freedom of the monolithic system"),
+    "wall_time": ("s", "wall-clock time of the run"),
+    "processes": ("1", "number of MPI processes of the run"),
+    "peak_outlet_flux": ("m3 s-1", "maximum over time of the outlet volumetric flow rate"),
+    "peak_stent_max_von_mises": ("Pa", "maximum over time of the maximum von Mises stress over the stent"),
+    "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
+}
+
+
+def cf_meta(name: str) -> tuple[str, str]:
+    """(units, long_name) of a study variable or coordinate."""
+    if name in EXTRA_CF:
+        return EXTRA_CF[name]
+    if name in CF:
+        return CF[name]
+    raise KeyError(f"no CF metadata for variable {name!r}")
+
+
+def _annotate(ds: xr.Dataset) -> xr.Dataset:
+    for name in list(ds.variables):
+        units, long_name = cf_meta(str(name))
+        ds[name].attrs.update(units=units, long_name=long_name)
+    return ds
+
+
+def open_run(path) -> xr.Dataset:
+    """A per-run probe dataset, loaded into memory (the file is closed)."""
+    with xr.open_dataset(path) as ds:
+        return ds.load()
+
+
+def _label(model: str, cfg: dict | None) -> str:
+    if cfg is not None and model in cfg.get("models", {}):
+        return str(cfg["models"][model]["label"])
+    return DEFAULT_LABELS.get(model, f"model {model}")
+
+
+def _run_attrs(prefix: str, attrs: dict) -> dict:
+    out = {}
+    for k, v in attrs.items():
+        if k in _SKIP_RUN_ATTRS:
+            continue
+        if isinstance(v, (bool, np.bool_)):
+            v = int(v)
+        out[f"run_{prefix}_{k}"] = v
+    return out
+
+
+def _interp(t_new: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Linear interpolation of y(t) (time along axis 0) onto t_new; NaN outside [t0, t1]."""
+    y = np.asarray(y, dtype=float)
+    flat = y.reshape(len(t), -1)
+    out = np.full((len(t_new), flat.shape[1]), np.nan)
+    inside = (t_new >= t[0] - 10.0 ** -TIME_DECIMALS) & (t_new <= t[-1] + 10.0 ** -TIME_DECIMALS)
+    for j in range(flat.shape[1]):
+        out[inside, j] = np.interp(t_new[inside], t, flat[:, j])
+    return out.reshape((len(t_new),) + y.shape[1:])
+
+
+def _clean_time(run: xr.Dataset) -> xr.Dataset:
+    """Sorted, unique times (a resumed run could repeat a step; the last record wins)."""
+    t = np.round(run["time"].values.astype(float), TIME_DECIMALS)
+    order = np.argsort(t, kind="stable")
+    t_sorted = t[order]
+    keep = np.r_[t_sorted[1:] != t_sorted[:-1], True]
+    return run.isel(time=order[keep]).assign_coords(time=t_sorted[keep])
+
+
+def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> xr.Dataset:
+    """Runs of one mesh level combined along `model` (see the module docstring).
+
+    time_grid: "union" (every step time of every run) or "nominal" (0, dt, ..., end from cfg["time"]).
+    """
+    runs = {}
+    for p in paths:
+        run = open_run(p)
+        m = str(run.attrs["model"])
+        if m in runs:
+            raise ValueError(f"two runs of model {m}: {runs[m].encoding.get('source')} and {p}")
+        run.encoding["source"] = str(p)
+        runs[m] = _clean_time(run)
+    if not runs:
+        raise ValueError("combine_models needs at least one run file")
+    levels = {str(r.attrs["mesh_level"]) for r in runs.values()}
+    if len(levels) != 1:
+        raise ValueError(f"runs of different mesh levels cannot be combined along model: {sorted(levels)}")
+    models = sorted(runs, key=lambda m: (len(m), m))
+
+    if time_grid == "union":
+        t = np.unique(np.concatenate([r["time"].values for r in runs.values()]))
+        grid_doc = ("union of the step times of all runs; every run linearly interpolated onto it "
+                    "(NaN outside the run's own time range)")
+    elif time_grid == "nominal":
+        if cfg is None:
+            raise ValueError("time_grid='nominal' needs the configuration")
+        dt, end = float(cfg["time"]["dt"]), float(cfg["time"]["end"])
+        t = np.round(np.arange(0.0, end + 0.5 * dt, dt), TIME_DECIMALS)
+        grid_doc = ("nominal grid 0, dt, ..., end of config time; every run linearly interpolated onto it "
+                    "(NaN outside the run's own time range)")
+    else:
+        raise ValueError(f"unknown time_grid {time_grid!r}; use 'union' or 'nominal'")
+
+    probe_t = np.unique(np.concatenate([np.round(r["probe_time"].values.astype(float), TIME_DECIMALS)
+                                        for r in runs.values()]))
+    ref = next(iter(runs.values()))
+    z = ref["z"].values
+    for m, r in runs.items():
+        if r.sizes["z"] != z.size or not np.allclose(r["z"].values, z):
+            raise ValueError(f"run of model {m} has a different probe line z")
+    stented = [m for m in models if "hole_offset" in runs[m].coords]
+    hole_offset = runs[stented[0]]["hole_offset"].values if stented else None
+    n_hole = max((runs[m].sizes.get("hole", 0) for m in models), default=0)
+    n_step = max(runs[m].sizes.get("step", 0) for m in models)
+
+    names = []
+    for m in models:
+        for v in runs[m].data_vars:
+            if v not in names:
+                names.append(v)
+    shapes = {"time": len(t), "probe_time": len(probe_t), "z": len(z), "step": n_step,
+              "hole": n_hole, "hole_offset": 0 if hole_offset is None else len(hole_offset)}
+    data_vars = {}
+    for v in names:
+        dims = next(runs[m][v].dims for m in models if v in runs[m])
+        arr = np.full((len(models),) + tuple(shapes[d] for d in dims), np.nan)
+        for i, m in enumerate(models):
+            r = runs[m]
+            if v not in r:
+                continue
+            da = r[v]
+            if "probe_time" in dims:   # align probe times (a run may lack one, e.g. a shorter run)
+                pt = np.round(r["probe_time"].values.astype(float), TIME_DECIMALS)
+                idx = np.searchsorted(probe_t, pt)
+                vals = da.transpose(*dims).values.astype(float)
+                sub = np.full((len(probe_t),) + vals.shape[1:], np.nan)
+                sub[idx] = vals
+            elif dims[0] == "time":
+                sub = _interp(t, r["time"].values, da.transpose(*dims).values)
+            else:
+                sub = da.transpose(*dims).values.astype(float)
+            if "hole_offset" in dims and not np.allclose(r["hole_offset"].values, hole_offset):
+                raise ValueError(f"run of model {m} has a different hole_offset grid")
+            sl = tuple(slice(0, s) for s in sub.shape)
+            arr[(i,) + sl] = sub
+        data_vars[v] = (("model",) + dims, arr)
+
+    coords = {"model": ("model", np.array(models, dtype=object)),
+              "model_label": ("model", np.array([_label(m, cfg) for m in models], dtype=object)),
+              "time": ("time", t), "probe_time": ("probe_time", probe_t), "z": ("z", z)}
+    if n_step:
+        coords["step"] = ("step", np.arange(n_step))
+    if hole_offset is not None:
+        coords["hole_offset"] = ("hole_offset", hole_offset)
+    if n_hole:
+        hz = np.full((len(models), n_hole), np.nan)
+        hs = np.full((len(models), n_hole), np.nan)
+        for i, m in enumerate(models):
+            if "hole_z" in runs[m].coords:
+                k = runs[m].sizes["hole"]
+                hz[i, :k] = runs[m]["hole_z"].values
+                hs[i, :k] = runs[m]["hole_side"].values
+        coords.update(hole=("hole", np.arange(n_hole)), hole_z=(("model", "hole"), hz),
+                      hole_side=(("model", "hole"), hs))
+    ds = _annotate(xr.Dataset(data_vars, coords=coords))
+    ds["outlet_hole_z"] = xr.DataArray(
+        [float(runs[m].attrs.get("outlet_hole_z", np.nan)) for m in models], dims="model",
+        attrs={"units": "m", "long_name": "axial position of the outlet-most side hole (Figs. 6-9)"})
+
+    attrs = {}
+    for m in models:
+        attrs.update(_run_attrs(m, runs[m].attrs))
+        attrs[f"run_{m}_source"] = Path(runs[m].encoding["source"]).name
+    ds.attrs.update(provenance_attrs(cfg or {}, mesh_level=levels.pop(), models=",".join(models),
+                                     time_grid=time_grid, time_grid_description=grid_doc,
+                                     time_interpolation="linear"))
+    ds.attrs.update(attrs)
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi study: models {', '.join(models)}, mesh {ds.attrs['mesh_level']}"
+    return ds
+
+
+def _select_probe_time(run: xr.Dataset, time: float) -> xr.DataArray:
+    pt = run["probe_time"].values.astype(float)
+    i = int(np.argmin(np.abs(pt - time))) if pt.size else -1
+    if i < 0 or abs(pt[i] - time) > 1e-6:
+        raise ValueError(f"run {run.attrs.get('model')}/{run.attrs.get('mesh_level')} has no probe at t = {time} s "
+                         f"(probe times {pt.tolist()})")
+    return run["stent_von_mises_line"].isel(probe_time=i)
+
+
+def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
+    """Mesh-convergence dataset (paper §3.1, Fig. 3) of runs of one model on several mesh levels."""
+    runs = {}
+    for p in paths:
+        run = open_run(p)
+        lv = str(run.attrs["mesh_level"])
+        if lv in runs:
+            raise ValueError(f"two runs on mesh level {lv}")
+        run.encoding["source"] = str(p)
+        runs[lv] = run
+    if not runs:
+        raise ValueError("combine_levels needs at least one run file")
+    models = {str(r.attrs["model"]) for r in runs.values()}
+    if len(models) != 1:
+        raise ValueError(f"a convergence study is one model on several meshes, got models {sorted(models)}")
+    order = list(cfg["mesh"]["levels"]) if cfg is not None else []
+    levels = sorted(runs, key=lambda lv: (order.index(lv) if lv in order else len(order), lv))
+    if "stent_von_mises_line" not in runs[levels[0]]:
+        raise ValueError(f"model {models.pop()} has no stent: no von Mises probe line")
+    z = runs[levels[0]]["z"].values
+    line = np.vstack([_select_probe_time(runs[lv], time).values for lv in levels])
+
+    def attr(lv, key):
+        return float(runs[lv].attrs.get(key, np.nan))
+
+    ds = xr.Dataset(
+        {"stent_von_mises_line": (("level", "z"), line),
+         "cells": ("level", [attr(lv, "cells") for lv in levels]),
+         "dofs": ("level", [attr(lv, "dofs") for lv in levels]),
+         "processes": ("level", [attr(lv, "processes") for lv in levels]),
+         "wall_time": ("level", [attr(lv, "wall_time_s") for lv in levels]),
+         "peak_outlet_flux": ("level", [float(runs[lv]["outlet_flux"].max()) for lv in levels]),
+         "peak_stent_max_von_mises": ("level", [float(runs[lv]["stent_max_von_mises"].max()) for lv in levels])},
+        coords={"level": ("level", np.array(levels, dtype=object)), "z": ("z", z)})
+    ds["line_max_difference_to_finest"] = np.abs(ds["stent_von_mises_line"]
+                                                 - ds["stent_von_mises_line"].isel(level=-1)).max("z")
+    ds = _annotate(ds)
+    ds["stent_von_mises_line"].attrs["long_name"] += f" at t = {time:g} s"
+    attrs = {}
+    for lv in levels:
+        attrs.update(_run_attrs(lv, runs[lv].attrs))
+        attrs[f"run_{lv}_source"] = Path(runs[lv].encoding["source"]).name
+    model = models.pop()
+    ds.attrs.update(provenance_attrs(cfg or {}, model=model, probe_time=float(time), levels=",".join(levels)))
+    ds.attrs.update(attrs)
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi mesh convergence: model {model}, t = {time:g} s"
+    return ds
+
+
+def write_dataset(ds: xr.Dataset, path) -> None:
+    """netCDF output, atomically (temporary sibling renamed into place)."""
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp)
