@@ -303,4 +303,4 @@ def test_table1(cfg, tmp_path):
     plotting.write_table(rows, tmp_path / "t.csv", tmp_path / "t.md")
     assert (tmp_path / "t.csv").read_text().splitlines()[0].startswith("model,label,hole_pair_spacing_mm")
     md = (tmp_path / "t.md").read_text().splitlines()
-    assert len(md) == 6 and "| 3 | 10 mm | 10.0 | 12 |" in md[4]
+    assert len(md) == 6 and "| 3 | 10 mm | 10 | 12 |" in md[4]

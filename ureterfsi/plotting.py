@@ -327,7 +327,7 @@ def table1(cfg: dict, sidecars) -> list[dict]:
         cells = d.get("cells", {})
         rows.append({
             "model": m, "label": c["label"],
-            "hole_pair_spacing_mm": round(c["hole_pair_spacing"] * MM, 6),
+            "hole_pair_spacing_mm": f"{c['hole_pair_spacing'] * MM:g}",
             "side_holes": c["holes"],
             "hole_pairs_z_mm": " ".join(f"{z * MM:g}" for z in d.get("hole_pair_z", [])),
             "hole_channels_found": d.get("hole_channels_found", ""),

@@ -1,0 +1,186 @@
+# Figures of the paper (Figs. 2-10), Table 1 and the side-hole flux figure, from the study datasets.
+# Every rule's params carry only the plotting options (config `figures`), so changing one re-runs the
+# plotting, not the solves or the aggregation. One script draws every figure, chosen by the rule name.
+
+FIGURE_OPTIONS = config["figures"]
+FIGURE_FORMATS = list(FIGURE_OPTIONS["formats"])
+# the report shows one file per figure: the raster format when there is one
+REPORT_FORMAT = "png" if "png" in FIGURE_FORMATS else FIGURE_FORMATS[0]
+FIGURE2_MODEL = "3"                                           # paper Fig. 2: the 10 mm model
+MODELS_DATASET = f"results/datasets/models_{STUDY_LEVEL}.nc"
+CONVERGENCE_DATASET = "results/datasets/mesh_convergence.nc"
+
+
+def figure_outputs(stem):
+    """results/figures/<stem>.<ext> for every configured format; the report format is marked for the report."""
+    out = []
+    for ext in FIGURE_FORMATS:
+        path = f"results/figures/{stem}.{ext}"
+        if ext == REPORT_FORMAT:
+            path = report(path, caption=f"../report/{stem}.rst", category="Paper figures")
+        out.append(path)
+    return out
+
+
+rule fig02_domain:
+    input:
+        msh=f"results/meshes/{SYMMETRY}/model{FIGURE2_MODEL}_{STUDY_LEVEL}.msh",
+        json=mesh_sidecar(FIGURE2_MODEL, STUDY_LEVEL),
+    output:
+        figure_outputs("fig02_domain"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig02_domain.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig03_mesh_convergence:
+    input:
+        conv=CONVERGENCE_DATASET,
+    output:
+        figure_outputs("fig03_mesh_convergence"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig03_mesh_convergence.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig04_outlet_flow:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig04_outlet_flow"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig04_outlet_flow.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig05_wall_displacement:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig05_wall_displacement"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig05_wall_displacement.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig06_hole_velocity:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig06_hole_velocity"),
+    params:
+        figures=FIGURE_OPTIONS,
+        time=0.5,
+    log:
+        "results/logs/figures/fig06_hole_velocity.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig07_hole_velocity:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig07_hole_velocity"),
+    params:
+        figures=FIGURE_OPTIONS,
+        time=1.0,
+    log:
+        "results/logs/figures/fig07_hole_velocity.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig08_hole_velocity:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig08_hole_velocity"),
+    params:
+        figures=FIGURE_OPTIONS,
+        time=2.0,
+    log:
+        "results/logs/figures/fig08_hole_velocity.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig09_hole_velocity:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig09_hole_velocity"),
+    params:
+        figures=FIGURE_OPTIONS,
+        time=2.5,
+    log:
+        "results/logs/figures/fig09_hole_velocity.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig10_stent_von_mises:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig10_stent_von_mises"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig10_stent_von_mises.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule fig11_hole_flux:
+    input:
+        models=MODELS_DATASET,
+    output:
+        figure_outputs("fig11_hole_flux"),
+    params:
+        figures=FIGURE_OPTIONS,
+    log:
+        "results/logs/figures/fig11_hole_flux.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule table1:
+    input:
+        sidecars=[mesh_sidecar(m, STUDY_LEVEL) for m in MODELS],
+    output:
+        csv="results/figures/table1.csv",
+        md=report("results/figures/table1.md", caption="../report/table1.rst", category="Paper figures"),
+    params:
+        models={m: config["models"][m] for m in MODELS},
+    log:
+        "results/logs/figures/table1.log",
+    script:
+        "../scripts/plot_figure.py"
+
+
+rule all_figures:
+    input:
+        rules.fig02_domain.output,
+        rules.fig03_mesh_convergence.output,
+        rules.fig04_outlet_flow.output,
+        rules.fig05_wall_displacement.output,
+        rules.fig06_hole_velocity.output,
+        rules.fig07_hole_velocity.output,
+        rules.fig08_hole_velocity.output,
+        rules.fig09_hole_velocity.output,
+        rules.fig10_stent_von_mises.output,
+        rules.fig11_hole_flux.output,
+        rules.table1.output,
