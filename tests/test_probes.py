@@ -1,0 +1,150 @@
+"""ureterfsi.probes against fields with known answers on small dolfinx meshes: point evaluation of a
+linear field (exact), von Mises stress of known stress states, location of a cell-field maximum, and
+the volumetric flux of a prescribed velocity through a boundary with the study's Nanson-form integrand."""
+from __future__ import annotations
+
+import math
+
+import gmsh
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem, mesh as dmesh
+from dolfinx.io import gmshio
+from mpi4py import MPI
+
+from ureterfsi.probes import CellField, PointProbe, assemble_scalar, von_mises
+
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(scope="module")
+def cube():
+    return dmesh.create_unit_cube(COMM, 4, 4, 4)
+
+
+def test_point_probe_linear_field_is_exact(cube):
+    V = fem.FunctionSpace(cube, ("CG", 1))
+    f = fem.Function(V)
+    f.interpolate(lambda x: 1.0 + 2.0 * x[0] - 3.0 * x[1] + 0.5 * x[2])
+    W = fem.VectorFunctionSpace(cube, ("CG", 1))
+    g = fem.Function(W)
+    g.interpolate(lambda x: np.vstack([x[0], -x[1], 2.0 * x[2] + x[0]]))
+    rng = np.random.default_rng(1)
+    pts = np.vstack([rng.random((20, 3)), [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.5, 0.5, 0.5], [1.5, 0.5, 0.5]]])
+    probe = PointProbe(cube, pts)
+    val = probe(f)
+    assert val.shape == (len(pts), 1)
+    exact = 1.0 + 2.0 * pts[:, 0] - 3.0 * pts[:, 1] + 0.5 * pts[:, 2]
+    np.testing.assert_allclose(val[:-1, 0], exact[:-1], atol=1e-12)
+    assert np.isnan(val[-1, 0])                                  # outside the mesh
+    vec = probe(g)
+    np.testing.assert_allclose(vec[:-1], np.c_[pts[:, 0], -pts[:, 1], 2 * pts[:, 2] + pts[:, 0]][:-1], atol=1e-12)
+
+
+def test_point_probe_accepts_2d_points():
+    square = dmesh.create_unit_square(COMM, 3, 3)
+    f = fem.Function(fem.FunctionSpace(square, ("CG", 1)))
+    f.interpolate(lambda x: 3.0 * x[0] + x[1])
+    pts = np.array([[0.2, 0.7], [0.9, 0.1]])
+    np.testing.assert_allclose(PointProbe(square, pts)(f)[:, 0], 3 * pts[:, 0] + pts[:, 1], atol=1e-12)
+
+
+@pytest.mark.parametrize("state, expected", [
+    ("uniaxial", 7.0),                     # sigma = s e1 (x) e1 -> s
+    ("shear", math.sqrt(3.0) * 2.0),       # sigma = t (e1 (x) e2 + e2 (x) e1) -> sqrt(3) t
+    ("hydrostatic", 0.0),                  # sigma = p I -> 0
+    ("uniaxial_plus_pressure", 7.0),       # invariant to an added pressure
+])
+def test_von_mises_of_known_stress_states(cube, state, expected):
+    # magnitudes as mesh Constants: the expression needs a domain to be interpolated
+    s, t, p = (fem.Constant(cube, c) for c in (7.0, 2.0, -5.0))
+    I = ufl.Identity(3)
+    e1, e2 = ufl.as_vector([1.0, 0.0, 0.0]), ufl.as_vector([0.0, 1.0, 0.0])
+    sigma = {"uniaxial": s * ufl.outer(e1, e1), "shear": t * (ufl.outer(e1, e2) + ufl.outer(e2, e1)),
+             "hydrostatic": p * I, "uniaxial_plus_pressure": s * ufl.outer(e1, e1) + p * I}[state]
+    field = CellField(cube, von_mises(sigma), 1)
+    values = field.update().x.array
+    np.testing.assert_allclose(values, expected, atol=1e-12)
+    assert field.maximum()[0] == pytest.approx(expected, abs=1e-12)
+
+
+def test_von_mises_of_a_spatially_varying_stress(cube):
+    """Uniaxial stress growing linearly in x: von Mises = |s(x)|, maximum at x = 1."""
+    x = ufl.SpatialCoordinate(cube)
+    e3 = ufl.as_vector([0.0, 0.0, 1.0])
+    field = CellField(cube, von_mises((1.0 + 4.0 * x[0]) * ufl.outer(e3, e3)), 1)
+    field.update()
+    vmax, where = field.maximum()
+    assert vmax == pytest.approx(5.0, abs=1e-12) and where[0] == pytest.approx(1.0)
+
+
+def test_cell_field_maximum_location(cube):
+    x = ufl.SpatialCoordinate(cube)
+    expr = x[0] + 2.0 * x[1] + 3.0 * x[2]
+    field = CellField(cube, expr, 1)
+    field.update()
+    vmax, where = field.maximum()
+    assert vmax == pytest.approx(6.0, abs=1e-12)
+    np.testing.assert_allclose(where, [1.0, 1.0, 1.0], atol=1e-12)
+    # restricted to the cells with midpoint x < 0.5: maximum on the face x = 0.5 at y = z = 1
+    n = cube.topology.index_map(3).size_local
+    mid = dmesh.compute_midpoints(cube, 3, np.arange(n, dtype=np.int32))
+    sub = CellField(cube, expr, 1, np.flatnonzero(mid[:, 0] < 0.5).astype(np.int32))
+    sub.update()
+    vmax, where = sub.maximum()
+    assert vmax == pytest.approx(5.5, abs=1e-12)
+    np.testing.assert_allclose(where, [0.5, 1.0, 1.0], atol=1e-12)
+
+
+TOP = 12
+
+
+@pytest.fixture(scope="module")
+def cylinder():
+    """Unit cylinder r <= 1, 0 <= z <= 1 with the top face z = 1 tagged TOP."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("cyl")
+        vol = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 1, 1.0)
+        gmsh.model.occ.synchronize()
+        top = [s for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False)
+               if abs(gmsh.model.occ.getCenterOfMass(2, s)[2] - 1.0) < 1e-9]
+        gmsh.model.addPhysicalGroup(3, [vol], 1)
+        gmsh.model.addPhysicalGroup(2, top, TOP)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.12)
+        gmsh.model.mesh.generate(3)
+        msh, _, facets = gmshio.model_to_mesh(gmsh.model, COMM, 0, gdim=3)
+    finally:
+        gmsh.finalize()
+    return msh, facets
+
+
+@pytest.mark.parametrize("dilation", [0.0, 0.1])
+def test_flux_of_poiseuille_profile_through_a_disk(cylinder, dilation):
+    """v = (0, 0, 1 - r^2) through the top of the unit cylinder: pi/2 (times (1+a)^2 on a mesh dilated by
+    u = a X, through the study's integrand (v - w) . J F^-T N dA with w = 0)."""
+    msh, facets = cylinder
+    V = fem.VectorFunctionSpace(msh, ("CG", 2))
+    v, u = fem.Function(V), fem.Function(V)
+    v.interpolate(lambda x: np.vstack([0 * x[0], 0 * x[0], 1.0 - x[0] ** 2 - x[1] ** 2]))
+    u.interpolate(lambda x: dilation * x)
+    F = ufl.Identity(3) + ufl.grad(u)
+    J = ufl.det(F)
+    N = ufl.FacetNormal(msh)
+    n_da = J * ufl.inv(F).T * N
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=facets, metadata={"quadrature_degree": 6})
+    flux = assemble_scalar(fem.form(ufl.dot(v, n_da) * ds(TOP)), COMM)
+    area = assemble_scalar(fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ds(TOP)), COMM)
+    e_z = ufl.as_vector([0.0, 0.0, 1.0])
+    mean_axial = assemble_scalar(fem.form(ufl.dot(v, e_z) * ufl.sqrt(ufl.dot(n_da, n_da)) * ds(TOP)), COMM) / area
+    scale = (1.0 + dilation) ** 2
+    # polygonal boundary of the disk: O(h^2) deficit, < 0.5 % at this size
+    assert flux == pytest.approx(scale * math.pi / 2, rel=5e-3)
+    assert area == pytest.approx(scale * math.pi, rel=5e-3)
+    assert mean_axial == pytest.approx(0.5, rel=5e-3)
+    # exactness on the meshed (polygonal) disk: the flux equals the integral of 1 - r^2 over the facets
+    one = assemble_scalar(fem.form((1.0 - ufl.SpatialCoordinate(msh)[0] ** 2 - ufl.SpatialCoordinate(msh)[1] ** 2)
+                                   * ds(TOP)), COMM)
+    assert flux == pytest.approx(scale * one, rel=1e-10)
