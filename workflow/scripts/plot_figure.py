@@ -20,8 +20,8 @@ def draw(rule: str):
         label = smk.config["models"][str(info["model"])]["label"]
         return plotting.fig02_domain(
             smk.input.msh, hole_z=max(info["hole_pair_z"]) if info["hole_pair_z"] else None,
-            title=f"Model {info['model']} ({label} between hole pairs), {info['symmetry']} model: "
-                  f"mesh in the mirror plane x = 0, {info['cells_total']:,} elements".replace(",", " "))
+            title=f"Model {info['model']} ({label} between hole pairs), {info['symmetry']} model, "
+                  f"{info['cells_total']:,} elements".replace(",", "\u2009") + ": mesh in the plane x = 0")
     if rule == "fig03_mesh_convergence":
         return plotting.fig03_mesh_convergence(aggregate.open_run(smk.input.conv))
     if rule == "fig04_outlet_flow":
