@@ -21,7 +21,7 @@ def draw(rule: str):
         return plotting.fig02_domain(
             smk.input.msh, hole_z=max(info["hole_pair_z"]) if info["hole_pair_z"] else None,
             title=f"Model {info['model']} ({label} between hole pairs), {info['symmetry']} model, "
-                  f"{info['cells_total']:,} elements".replace(",", "\u2009") + ": mesh in the plane x = 0")
+                  f"{format(info['cells_total'], ',').replace(',', ' ')} elements: mesh in the plane x = 0")
     if rule == "fig03_mesh_convergence":
         return plotting.fig03_mesh_convergence(aggregate.open_run(smk.input.conv))
     if rule == "fig04_outlet_flow":
