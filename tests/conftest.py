@@ -4,6 +4,8 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
+import netCDF4  # noqa: F401  (before any dolfinx import: see ureterfsi/__init__.py)
+
 import pytest
 
 from ureterfsi.config import load_config

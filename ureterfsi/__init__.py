@@ -9,4 +9,8 @@ mesh        gmsh meshes (full, half, quarter, axisymmetric) with sidecar statist
 fsi         the scene-agnostic FSI engine: physics blocks, monolithic ALE coupling, time stepping
 """
 
+# netCDF4 must load its bundled HDF5 before dolfinx loads Debian's MPI-HDF5: the other order
+# segfaults on the first netCDF write (two HDF5 libraries in one process).
+import netCDF4  # noqa: F401,E402  (import order matters)
+
 __version__ = "0.1.0"

@@ -330,11 +330,14 @@ def main(argv=None) -> int:
     import argparse
     import sys
 
-    from .config import ConfigError, load_config_files
+    import json
+
+    from .config import ConfigError, load_config, load_config_files
 
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
                                  description="Fully coupled FSI solve of one stent model on one mesh.")
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
+    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON (from Snakemake)")
     ap.add_argument("--model", required=True)
     ap.add_argument("--level", required=True)
     ap.add_argument("--symmetry", required=True)
@@ -346,7 +349,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     configure_logging()
     try:
-        cfg = load_config_files(args.config)
+        if args.config_json:
+            with open(args.config_json) as fh:
+                cfg = load_config(json.load(fh))
+        else:
+            cfg = load_config_files(args.config)
     except ConfigError as err:
         print(err, file=sys.stderr)
         return 2
