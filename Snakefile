@@ -1,6 +1,8 @@
 # ureterfsi — reproduction of the stented-ureter FSI study.
-#   snakemake --cores 2                 full reproduction
+#   snakemake --cores 2                 full reproduction (every figure of the paper)
 #   snakemake --cores 2 all_meshes      every mesh of the configuration
+#   snakemake --cores 2 all_figures     the figures (runs whatever is missing)
+#   snakemake --report report.html      HTML report with every figure and its caption
 # Configuration: config/config.yaml, validated against workflow/schemas/config.schema.yaml
 # and by ureterfsi.config (geometric consistency) before any rule runs.
 import sys
@@ -24,9 +26,12 @@ except ConfigError as err:
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/mesh.smk"
+include: "workflow/rules/solve.smk"
+include: "workflow/rules/aggregate.smk"
+include: "workflow/rules/figures.smk"
 
 
 rule all:
     input:
-        rules.all_meshes.input,
+        rules.all_figures.input,
     default_target: True

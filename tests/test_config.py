@@ -184,3 +184,11 @@ def test_snakemake_refuses_bad_config(tmp_path, repo_root, cfg):
     assert r.returncode != 0
     assert "config error: geometry.hole_diameter:" in r.stderr, r.stderr
     assert not (tmp_path / "results").exists()
+
+
+def test_paper_mesh_overlay_validates_with_explicit_minima(repo_root):
+    from ureterfsi.config import load_config_files
+
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/paper-meshes.yaml"])
+    assert cfg["mesh"]["symmetry"] == "full"
+    assert cfg["mesh"]["resolution_minima"]["hole"] < 4

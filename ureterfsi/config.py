@@ -33,8 +33,8 @@ RTOL = 1e-9  # relative slack of the floating-point comparisons of exact design 
 
 # Bounds of the consistency checks (documented in the messages).
 MIN_GAP_HOLE_DIAMETERS = 2.0     # fluid gap stent-ureter >= 2 hole diameters (a hole jet has room to develop)
-MIN_ELEMENTS = {"hole": ("hole_diameter", 4.0), "stent_wall": ("stent_wall_thickness", 2.0),
-                "ureter_wall": ("ureter_wall_thickness", 2.0)}
+MIN_ELEMENTS = {"hole": "hole_diameter", "stent_wall": "stent_wall_thickness",   # mesh size -> geometry
+                "ureter_wall": "ureter_wall_thickness"}
 START_WIDTHS = 3.0               # pulse centre may start at most 3 widths upstream of the inlet
 MIN_BULK_RATIO = 10.0            # kappa / (C10 + C01) >= 10: nearly incompressible (paper §2.3.2)
 
@@ -316,13 +316,15 @@ def check_resolution(cfg):
     g, sizes = cfg["geometry"], cfg["mesh"]["sizes"]
     for name, lv in cfg["mesh"]["levels"].items():
         f = lv["size_factor"]
-        for size_key, (geo_key, need) in MIN_ELEMENTS.items():
+        for size_key, geo_key in MIN_ELEMENTS.items():
+            need = cfg["mesh"]["resolution_minima"][size_key]
             n = g[geo_key] / (sizes[size_key] * f)
             if not n >= need * (1 - RTOL):
                 raise ConfigError(f"mesh.sizes.{size_key}",
                                   f"at level '{name}' (size_factor {_fmt(f)}) geometry.{geo_key} / "
                                   f"(mesh.sizes.{size_key} * size_factor) = {_fmt(g[geo_key])} / "
-                                  f"({_fmt(sizes[size_key])} * {_fmt(f)}) = {n:.3g} elements; need >= {_fmt(need)}")
+                                  f"({_fmt(sizes[size_key])} * {_fmt(f)}) = {n:.3g} elements; need >= {_fmt(need)} "
+                                  f"(mesh.resolution_minima.{size_key})")
 
 
 def check_symmetry(cfg):
