@@ -103,6 +103,10 @@ BAD = [
     ("study.convergence_time", 1.25, "study.convergence_time", "time.probe_times"),
     ("figures.formats", ["jpg"], "figures.formats[0]", "jpg"),
     ("figures.dpi", 10, "figures.dpi", "10"),
+    ("figures.wave_times", [0.5, 0.75], "figures.wave_times[1]", "must be one of time.probe_times"),
+    ("figures.hole_velocity_times", [0.5, 1.0, 2.0, 3.0], "figures.hole_velocity_times[3]", "time.probe_times"),
+    ("figures.hole_velocity_times", [0.5, 1.0, 2.0], "figures.hole_velocity_times", "at least 4"),
+    ("figures.domain_model", "9", "figures.domain_model", "must be one of models"),
 ]
 
 

@@ -372,10 +372,22 @@ def check_study(cfg):
                                                     f"{_fmt(cfg['time']['probe_times'])}, got {_fmt(st['convergence_time'])}")
 
 
+def check_figures(cfg):
+    f, probes = cfg["figures"], cfg["time"]["probe_times"]
+    for key in ("wave_times", "hole_velocity_times"):
+        for i, t in enumerate(f[key]):
+            if not any(abs(t - p) < 1e-12 for p in probes):
+                raise ConfigError(f"figures.{key}[{i}]", f"must be one of time.probe_times {_fmt(probes)} "
+                                                        f"(the snapshots are taken there), got {_fmt(t)}")
+    if "domain_model" in f and f["domain_model"] not in cfg["models"]:
+        raise ConfigError("figures.domain_model", f"must be one of models {sorted(cfg['models'], key=int)}, "
+                                                  f"got {_fmt(f['domain_model'])}")
+
+
 CHECKS = (
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
-    check_symmetry, check_peristalsis, check_ureter_material, check_study,
+    check_symmetry, check_peristalsis, check_ureter_material, check_study, check_figures,
 )
 
 

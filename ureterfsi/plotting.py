@@ -22,9 +22,28 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from . import tags  # noqa: E402
 
+# Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
+# figures.hole_velocity_times) through wave_times() and hole_figures().
 # paper §3.4: the pulse is at the top, middle, bottom of the segment and at/past the outlet
 WAVE_TIMES = (0.5, 1.0, 2.0, 2.5)
-HOLE_FIGURES = {"fig06": 0.5, "fig07": 1.0, "fig08": 2.0, "fig09": 2.5}
+HOLE_FIGURE_STEMS = ("fig06", "fig07", "fig08", "fig09")
+HOLE_FIGURES = dict(zip(HOLE_FIGURE_STEMS, (0.5, 1.0, 2.0, 2.5)))
+
+
+def wave_times(cfg: dict | None = None) -> tuple:
+    """Instants of Fig. 5: figures.wave_times of the config, else the paper's."""
+    return tuple(float(t) for t in ((cfg or {}).get("figures", {}).get("wave_times") or WAVE_TIMES))
+
+
+def hole_figures(cfg: dict | None = None) -> dict:
+    """{"fig06": t, ..., "fig09": t}: figures.hole_velocity_times of the config (in order), else the paper's."""
+    times = (cfg or {}).get("figures", {}).get("hole_velocity_times")
+    if times is None:
+        return dict(HOLE_FIGURES)
+    if len(times) != len(HOLE_FIGURE_STEMS):
+        raise ValueError(f"figures.hole_velocity_times needs {len(HOLE_FIGURE_STEMS)} entries (Figs. 6-9), "
+                         f"got {list(times)}")
+    return {stem: float(t) for stem, t in zip(HOLE_FIGURE_STEMS, times)}
 MODEL_COLORS = {"1": "0.2", "2": "tab:blue", "3": "tab:orange", "4": "tab:green"}
 MODEL_STYLES = {"1": "-", "2": "-", "3": "--", "4": "-."}
 REGION_COLORS = {tags.FLUID: "#9ecae1", tags.URETER: "#fdae6b", tags.STENT: "#a1d99b"}
@@ -220,7 +239,8 @@ def fig04_outlet_flow(ds: xr.Dataset):
 
 # ---------------------------------------------------------------------------------------------- Fig. 5
 def fig05_wall_displacement(ds: xr.Dataset, times=WAVE_TIMES):
-    """Radial displacement of the ureter outer wall vs z at the paper's instants, all models."""
+    """Radial displacement of the ureter outer wall vs z at `times` (default: the paper's instants; the
+    workflow passes figures.wave_times), all models. Times without a probe snapshot are skipped."""
     times = [t for t in times if _probe_index(ds, t) is not None]
     n = max(len(times), 1)
     rows = 2 if n > 2 else 1

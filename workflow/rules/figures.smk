@@ -6,7 +6,11 @@ FIGURE_OPTIONS = config["figures"]
 FIGURE_FORMATS = list(FIGURE_OPTIONS["formats"])
 # the report shows one file per figure: the raster format when there is one
 REPORT_FORMAT = "png" if "png" in FIGURE_FORMATS else FIGURE_FORMATS[0]
-FIGURE2_MODEL = "3"                                           # paper Fig. 2: the 10 mm model
+# paper Fig. 2: model 3 (10 mm between hole pairs), the convergence model, unless figures.domain_model says otherwise
+FIGURE2_MODEL = str(FIGURE_OPTIONS.get("domain_model", config["study"]["convergence_model"]))
+# instants of Fig. 5 and of Figs. 6-9 (config figures.wave_times, figures.hole_velocity_times; paper §3.4-3.5)
+WAVE_TIMES = [float(t) for t in FIGURE_OPTIONS["wave_times"]]
+HOLE_TIMES = dict(zip(("fig06", "fig07", "fig08", "fig09"), (float(t) for t in FIGURE_OPTIONS["hole_velocity_times"])))
 MODELS_DATASET = f"results/datasets/models_{STUDY_LEVEL}.nc"
 CONVERGENCE_DATASET = "results/datasets/mesh_convergence.nc"
 
@@ -30,6 +34,7 @@ rule fig02_domain:
         figure_outputs("fig02_domain"),
     params:
         figures=FIGURE_OPTIONS,
+        model=FIGURE2_MODEL,
     log:
         "results/logs/figures/fig02_domain.log",
     script:
@@ -69,6 +74,7 @@ rule fig05_wall_displacement:
         figure_outputs("fig05_wall_displacement"),
     params:
         figures=FIGURE_OPTIONS,
+        times=WAVE_TIMES,
     log:
         "results/logs/figures/fig05_wall_displacement.log",
     script:
@@ -82,7 +88,7 @@ rule fig06_hole_velocity:
         figure_outputs("fig06_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
-        time=0.5,
+        time=HOLE_TIMES["fig06"],
     log:
         "results/logs/figures/fig06_hole_velocity.log",
     script:
@@ -96,7 +102,7 @@ rule fig07_hole_velocity:
         figure_outputs("fig07_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
-        time=1.0,
+        time=HOLE_TIMES["fig07"],
     log:
         "results/logs/figures/fig07_hole_velocity.log",
     script:
@@ -110,7 +116,7 @@ rule fig08_hole_velocity:
         figure_outputs("fig08_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
-        time=2.0,
+        time=HOLE_TIMES["fig08"],
     log:
         "results/logs/figures/fig08_hole_velocity.log",
     script:
@@ -124,7 +130,7 @@ rule fig09_hole_velocity:
         figure_outputs("fig09_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
-        time=2.5,
+        time=HOLE_TIMES["fig09"],
     log:
         "results/logs/figures/fig09_hole_velocity.log",
     script:

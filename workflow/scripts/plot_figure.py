@@ -27,7 +27,7 @@ def draw(rule: str):
     if rule == "fig04_outlet_flow":
         return plotting.fig04_outlet_flow(models())
     if rule == "fig05_wall_displacement":
-        return plotting.fig05_wall_displacement(models())
+        return plotting.fig05_wall_displacement(models(), times=[float(t) for t in smk.params.times])
     if rule in ("fig06_hole_velocity", "fig07_hole_velocity", "fig08_hole_velocity", "fig09_hole_velocity"):
         return plotting.fig_hole_velocity(models(), float(smk.params.time))
     if rule == "fig10_stent_von_mises":
