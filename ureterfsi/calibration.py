@@ -425,7 +425,7 @@ CENTRE_SCAN = (0.5, 0.4, 0.3, 0.2, 0.16, 0.14, 0.13, 0.125, 0.12, 0.11, 0.1, 0.0
 def report(cfg, nr=4, transient=True, transient_end=None, refine=True) -> dict:
     """Everything of the calibration study as one JSON-serialisable dict."""
     Ri, Ro = wall_radii(cfg)
-    out = {"inputs": {k: cfg[k] for k in ("geometry", "ureter", "peristalsis", "time")},
+    out = {"inputs": {k: cfg[k] for k in SECTIONS},
            "wall": {"inner_radius": Ri, "outer_radius": Ro},
            "neglected": "urine pressure on the inner surface (~1e2 Pa vs the 5e4 Pa peak load)"}
     out["plane_strain_estimate"] = plane_strain_estimate(cfg)
@@ -496,9 +496,21 @@ def format_report(r: dict) -> str:
     return "\n".join(lines)
 
 
+SECTIONS = ("geometry", "ureter", "peristalsis", "time")   # the only config sections read here
+
+
+def write_report(cfg, path, **kwargs) -> dict:
+    """Run `report`, add provenance (hash of the sections used), write JSON atomically; returns it."""
+    from ureterfsi.provenance import provenance_attrs, write_json
+
+    r = report(cfg, **kwargs)
+    r["provenance"] = provenance_attrs({k: cfg[k] for k in SECTIONS})
+    write_json(path, r)
+    return r
+
+
 def main(argv=None) -> int:
     from ureterfsi.config import DEFAULT_CONFIG, load_config_files
-    from ureterfsi.provenance import provenance_attrs, write_json
 
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.calibration", description=__doc__.split("\n")[0])
     ap.add_argument("configs", nargs="*", default=[str(DEFAULT_CONFIG)])
@@ -510,12 +522,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(message)s")
     cfg = load_config_files(args.configs)
-    r = report(cfg, nr=args.cells_through_wall, transient=not args.no_transient,
-               transient_end=args.transient_end, refine=not args.no_refine)
+    kw = dict(nr=args.cells_through_wall, transient=not args.no_transient, transient_end=args.transient_end,
+              refine=not args.no_refine)
+    r = write_report(cfg, args.json, **kw) if args.json else report(cfg, **kw)
     print(format_report(r))
-    if args.json:
-        r["provenance"] = provenance_attrs({k: cfg[k] for k in ("geometry", "ureter", "peristalsis", "time")})
-        write_json(args.json, r)
     return 0
 
 

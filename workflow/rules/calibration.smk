@@ -1,0 +1,21 @@
+# Design rule of the peristaltic load (paper §2.4.2: the Gaussian pulse gives ~1 mm wall deformation),
+# checked by the solver on an axisymmetric wall-only model, and the calibration rule of the
+# Mooney-Rivlin coefficients (ureterfsi.calibration). Cheap: a 2D r-z wall, ~1-2 min on one core.
+
+
+rule calibration:
+    output:
+        "results/calibration/wall_calibration.json",
+    params:
+        # rerun trigger and the only input: the configuration sections the study reads
+        sections=lambda w: {k: config[k] for k in ("geometry", "ureter", "peristalsis", "time")},
+    log:
+        "results/logs/calibration/wall_calibration.log",
+    benchmark:
+        "results/benchmarks/calibration/wall_calibration.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    script:
+        "../scripts/calibration.py"
