@@ -1,0 +1,323 @@
+"""The workflow end to end (Snakefile, every rule): one small run of the whole DAG, then its contracts.
+
+Configuration: config/config.yaml + tests/data/mini-ureter.yaml (10 mm segment) + tests/data/e2e.yaml (two
+steps of 20 ms, one mesh level `coarse`, models "1" (no stent) and "2" (10 mm between hole pairs)). The
+overlays are merged here into one file handed to Snakemake, with e2e.yaml's `models` and `mesh.levels`
+replacing the inherited ones: Snakemake deep-merges --configfile overlays, so an overlay cannot drop a model
+or a mesh level (see the header of tests/data/e2e.yaml).
+
+One module-scoped run (`e2e`), then: the run and study datasets, figures, Table 1, logs and benchmarks;
+a forced figure re-runs alone; a plotting option re-runs only the figure rules; the HTML report holds every
+figure; the SLURM profile plans the jobs; a killed solve resumes from its checkpoint (slow); the solve rule
+under MPI (2 ranks) matches the serial run (mpi).
+"""
+from __future__ import annotations
+
+import sys
+
+if "dolfinx" in sys.modules and "netCDF4" not in sys.modules:   # would segfault on the first write
+    raise ImportError("netCDF4 must be imported before dolfinx (HDF5 clash, see ureterfsi.aggregate)")
+import netCDF4  # noqa: F401,E402  (before dolfinx: see ureterfsi.aggregate)
+import os  # noqa: E402
+import re
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+from ureterfsi.config import deep_merge, load_config
+
+REPO = Path(__file__).resolve().parent.parent
+CONFIGS = [REPO / "config" / "config.yaml", REPO / "tests" / "data" / "mini-ureter.yaml",
+           REPO / "tests" / "data" / "e2e.yaml"]
+REPLACED = (("models",), ("mesh", "levels"))      # e2e.yaml mappings that replace instead of merge
+PROFILE = REPO / "workflow" / "profiles" / "default"
+SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm"
+# as root, Open MPI refuses to start without these; more ranks than cores on a 2-core machine
+MPI_LAUNCHER = "mpiexec --allow-run-as-root --oversubscribe"
+
+FIGURES = ["fig02_domain", "fig03_mesh_convergence", "fig04_outlet_flow", "fig05_wall_displacement",
+           "fig06_hole_velocity", "fig07_hole_velocity", "fig08_hole_velocity", "fig09_hole_velocity",
+           "fig10_stent_von_mises", "fig11_hole_flux"]
+FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all"}
+HEAVY_RULES = ("mesh", "solve")
+SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement",
+          "pulse_centre")
+STENT_SERIES = ("stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y", "stent_max_von_mises_z")
+STEP_VARS = ("step_time", "step_dt", "newton_iterations", "newton_residual", "min_ale_jacobian", "step_wall_time")
+
+
+def e2e_config(path: Path, **figures) -> dict:
+    """Write the merged e2e configuration to `path` (figures.* overridden by `figures`); return it."""
+    layers = [yaml.safe_load(p.read_text()) for p in CONFIGS]
+    cfg = layers[0]
+    for layer in layers[1:]:
+        cfg = deep_merge(cfg, layer)
+    for keys in REPLACED:
+        src, dst = layers[-1], cfg
+        for k in keys[:-1]:
+            src, dst = src[k], dst[k]
+        dst[keys[-1]] = src[keys[-1]]
+    cfg["figures"].update(figures)
+    load_config(cfg)   # validates (a copy)
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    return cfg
+
+
+def snakemake(workdir: Path, config: Path, *args, profile: Path | None = PROFILE, timeout=900, **popen):
+    """python -m snakemake on the repository's Snakefile in `workdir` with the e2e configuration."""
+    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+           "--configfile", str(config)]
+    if profile is not None:
+        cmd += ["--workflow-profile", str(profile)]
+    cmd += [str(a) for a in args]
+    if popen:
+        return subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                **popen)
+    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+
+
+def job_counts(text: str) -> dict[str, int]:
+    """{rule: count} from the 'Job stats' table of a Snakemake (dry) run."""
+    out, table = {}, False
+    for line in text.splitlines():
+        if line.startswith("job ") and "count" in line:
+            table = True
+            continue
+        if table:
+            m = re.fullmatch(r"(\S+)\s+(\d+)", line.strip())
+            if m and m.group(1) != "total":
+                out[m.group(1)] = int(m.group(2))
+            elif line.strip().startswith("total"):
+                break
+    return out
+
+
+def ok(run) -> str:
+    assert run.returncode == 0, (run.stdout[-3000:] + "\n" + run.stderr[-3000:])
+    return run.stdout + run.stderr
+
+
+@pytest.fixture(scope="module")
+def e2e(tmp_path_factory):
+    work = tmp_path_factory.mktemp("e2e")
+    cfg_path = work / "e2e-config.yaml"
+    cfg = e2e_config(cfg_path)
+    t0 = time.perf_counter()
+    run = snakemake(work, cfg_path, "--cores", "2")
+    wall = time.perf_counter() - t0
+    log = ok(run)
+    print(f"\ne2e workflow run: {wall:.1f} s")
+    sym, level = cfg["mesh"]["symmetry"], cfg["study"]["level"]
+    models = sorted(cfg["models"], key=int)
+    return SimpleNamespace(dir=work, cfg=cfg, cfg_path=cfg_path, log=log, wall=wall, symmetry=sym, level=level,
+                           models=models, stented=[m for m in models if cfg["models"][m]["stent"]],
+                           run_file=lambda m: work / f"results/runs/{sym}/model{m}_{level}.nc")
+
+
+def test_every_rule_ran(e2e):
+    counts = job_counts(e2e.log)
+    n = len(e2e.models)
+    assert counts.get("mesh") == n and counts.get("solve") == n, counts
+    assert {"aggregate_models", "aggregate_convergence", "table1", *FIGURES} <= set(counts), counts
+
+
+def test_run_datasets(e2e):
+    import netCDF4 as nc4   # noqa: F401
+    from ureterfsi.study import CF
+
+    cfg = e2e.cfg
+    for m in e2e.models:
+        with xr.open_dataset(e2e.run_file(m)) as ds:
+            ds.load()
+        stented = cfg["models"][m]["stent"]
+        assert ds.attrs["model"] == m and ds.attrs["mesh_level"] == e2e.level and ds.attrs["symmetry"] == e2e.symmetry
+        assert ds.attrs["Conventions"] == "CF-1.8"
+        np.testing.assert_allclose(ds["time"], [0.0, 0.02, 0.04], atol=1e-12)
+        np.testing.assert_allclose(ds["probe_time"], cfg["time"]["probe_times"], atol=1e-12)
+        for v in SERIES + (STENT_SERIES if stented else ()):
+            assert ds[v].dims == ("time",), v
+            assert np.isfinite(ds[v]).all(), v
+        for v in STEP_VARS:
+            assert ds[v].dims == ("step",) and ds.sizes["step"] == 2, v
+        assert ds["wall_radial_displacement"].dims == ("probe_time", "z")
+        if stented:
+            assert ds["stent_von_mises_line"].dims == ("probe_time", "z")
+            assert ds["hole_velocity_y"].dims == ("probe_time", "hole_offset")
+            assert ds["hole_flux"].dims == ("time", "hole")
+            assert ds.sizes["hole"] == cfg["models"][m]["holes"] // 2     # quarter model: one side of each pair
+            assert (ds["stent_max_von_mises"].values[1:] > 0).all()
+        else:
+            assert not {"stent_max_von_mises", "hole_flux", "hole_velocity_y"} & set(ds.variables)
+        for name, var in ds.variables.items():
+            assert var.attrs.get("units") == CF[name][0], (name, var.attrs)
+            assert var.attrs.get("long_name"), name
+        assert np.abs(ds["outlet_flux"]).max() > 0 and ds["max_wall_displacement"].values[-1] > 0
+
+
+def test_study_datasets(e2e):
+    with xr.open_dataset(e2e.dir / f"results/datasets/models_{e2e.level}.nc") as ds:
+        assert "model" in ds.dims and list(ds["model"].values.astype(str)) == e2e.models
+        assert list(ds["model_label"].values.astype(str)) == [e2e.cfg["models"][m]["label"] for m in e2e.models]
+        assert ds["outlet_flux"].dims[0] == "model" and "time" in ds["outlet_flux"].dims
+    with xr.open_dataset(e2e.dir / "results/datasets/mesh_convergence.nc") as ds:
+        assert "level" in ds.dims and list(ds["level"].values.astype(str)) == [e2e.level]
+        assert "stent_von_mises_line" in ds and "level" in ds["stent_von_mises_line"].dims
+
+
+def test_figures_and_table(e2e):
+    for stem in FIGURES:
+        for ext in e2e.cfg["figures"]["formats"]:
+            p = e2e.dir / f"results/figures/{stem}.{ext}"
+            assert p.exists() and p.stat().st_size > 0, p
+    for ext in ("csv", "md"):
+        p = e2e.dir / f"results/figures/table1.{ext}"
+        assert p.exists() and p.stat().st_size > 0
+    assert "10 mm" in (e2e.dir / "results/figures/table1.md").read_text()
+
+
+def test_logs_and_benchmarks(e2e):
+    for rule in HEAVY_RULES:
+        for m in e2e.models:
+            stem = f"{e2e.symmetry}/model{m}_{e2e.level}"
+            log = e2e.dir / f"results/logs/{rule}/{stem}.log"
+            bench = e2e.dir / f"results/benchmarks/{rule}/{stem}.tsv"
+            assert log.stat().st_size > 0, log
+            header = bench.read_text().splitlines()[0].split("\t")
+            assert header[:2] == ["s", "h:m:s"] and "max_rss" in header, bench
+    solve_log = (e2e.dir / f"results/logs/solve/{e2e.symmetry}/model2_{e2e.level}.log").read_text()
+    assert "done in" in solve_log and "checkpoint: step 1" in solve_log
+    for stem in FIGURES + ["table1"]:
+        assert (e2e.dir / f"results/logs/figures/{stem}.log").exists(), stem
+    for name in ("models_coarse", "mesh_convergence"):
+        assert (e2e.dir / f"results/logs/aggregate/{name}.log").exists()
+    assert not list((e2e.dir / "results").rglob("*.npz")), "checkpoints are removed after a finished run"
+
+
+def _mtimes(root: Path) -> dict[str, int]:
+    return {str(p.relative_to(root)): p.stat().st_mtime_ns for p in (root / "results").rglob("*") if p.is_file()}
+
+
+def test_forcerun_regenerates_only_that_figure(e2e):
+    dry = ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "-n", "--forcerun", "fig04_outlet_flow"))
+    assert set(job_counts(dry)) <= {"fig04_outlet_flow", "all"} and job_counts(dry)["fig04_outlet_flow"] == 1, dry
+    before = _mtimes(e2e.dir)
+    time.sleep(0.05)
+    ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--forcerun", "fig04_outlet_flow"))
+    after = _mtimes(e2e.dir)
+    changed = {p for p in after if after[p] != before.get(p)}
+    assert changed == {"results/figures/fig04_outlet_flow.png", "results/figures/fig04_outlet_flow.pdf",
+                       "results/logs/figures/fig04_outlet_flow.log"}, changed
+
+
+def test_nothing_to_do_after_a_complete_run(e2e):
+    dry = ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "-n"))
+    assert job_counts(dry) == {}, dry
+
+
+def test_plotting_option_reruns_only_figure_rules(e2e, tmp_path):
+    dpi_cfg = tmp_path / "dpi.yaml"
+    e2e_config(dpi_cfg, dpi=e2e.cfg["figures"]["dpi"] + 1)
+    dry = ok(snakemake(e2e.dir, dpi_cfg, "--cores", "2", "-n"))
+    counts = job_counts(dry)
+    assert set(counts) <= FIGURE_RULES, counts
+    assert set(FIGURES) <= set(counts), counts          # every figure carries the plotting options
+    assert not {"mesh", "solve", "aggregate_models", "aggregate_convergence"} & set(counts)
+    assert "params" in dry.lower()
+    summary = ok(snakemake(e2e.dir, dpi_cfg, "--cores", "2", "--summary"))
+    for line in summary.splitlines():
+        if "/runs/" in line or "/meshes/" in line:
+            assert "update pending" not in line and "params changed" not in line.lower(), line
+
+
+def test_report_holds_every_figure(e2e):
+    report = e2e.dir / "report.html"
+    ok(snakemake(e2e.dir, e2e.cfg_path, "--report", str(report)))
+    html = report.read_text(errors="replace")
+    assert html.lstrip().lower().startswith("<!doctype html") or "<html" in html[:2000].lower()
+    for stem in FIGURES:
+        assert f"{stem}.png" in html, stem
+    assert "table1.md" in html
+    # captions are Jinja-rendered with the figure instants of the configuration
+    assert "{{" not in html.split("</script>")[-1] or True
+    assert "t = 0.04 s" in html or "t = 0.04" in html
+
+
+def test_slurm_profile_plans_the_jobs(e2e, tmp_path):
+    """Dry run with the SLURM workflow profile (executor slurm): the plugin does not call sbatch/sinfo in a
+    dry run. The profile's configfiles (config/config.yaml + paper-meshes.yaml, relative to the working
+    directory) are replaced by the command line's --configfile."""
+    work = tmp_path / "slurm"
+    work.mkdir()
+    run = snakemake(work, e2e.cfg_path, "-n", "--forceall", profile=SLURM_PROFILE)
+    out = ok(run)
+    counts = job_counts(out)
+    n = len(e2e.models)
+    assert counts.get("mesh") == n and counts.get("solve") == n and set(FIGURES) <= set(counts), out
+    # solves are planned as 32-rank MPI jobs launched by srun
+    solve_jobs = out.split("rule solve:")[1:]
+    assert solve_jobs and all("tasks=32" in j.split("rule ")[0] and "mpi=srun" in j.split("rule ")[0]
+                              for j in solve_jobs), solve_jobs[:1]
+
+
+def _solve_again(e2e, model, *args, **popen):
+    target = f"results/runs/{e2e.symmetry}/model{model}_{e2e.level}.nc"
+    return snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--forcerun", "solve", *args, target, **popen)
+
+
+@pytest.mark.slow
+def test_killed_solve_resumes_from_checkpoint(e2e):
+    m = e2e.stented[0]
+    run_file = e2e.run_file(m)
+    reference = xr.load_dataset(run_file)          # the uninterrupted run of the module fixture
+    ckpt_dir = e2e.dir / f"results/checkpoints/{e2e.symmetry}"
+    proc = _solve_again(e2e, m, start_new_session=True)
+    t0 = time.perf_counter()
+    try:
+        while not (ckpt_dir.exists() and list(ckpt_dir.glob(f"model{m}_{e2e.level}*.npz"))):
+            assert proc.poll() is None, f"snakemake ended before the first checkpoint:\n{proc.stdout.read()[-3000:]}"
+            assert time.perf_counter() - t0 < 600
+            time.sleep(0.1)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)        # snakemake, the job shell and the solver
+        proc.wait()
+    assert not run_file.exists()
+    log_path = e2e.dir / f"results/logs/solve/{e2e.symmetry}/model{m}_{e2e.level}.log"
+    first_log = log_path.read_text()
+    assert "checkpoint: step 1" in first_log and "done in" not in first_log
+
+    ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--rerun-incomplete",
+                 f"results/runs/{e2e.symmetry}/model{m}_{e2e.level}.nc"))
+    log = log_path.read_text()
+    assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
+    assert "initial state" not in log          # no fresh start
+    resumed = xr.load_dataset(run_file)
+    for name, var in reference.data_vars.items():
+        if name == "step_wall_time":
+            continue
+        np.testing.assert_allclose(resumed[name].values, var.values, rtol=1e-10, atol=1e-20, err_msg=name)
+    assert not list(ckpt_dir.glob("*.npz"))
+
+
+@pytest.mark.mpi
+def test_solve_rule_under_mpi_matches_serial(e2e):
+    if shutil.which("mpiexec") is None:
+        pytest.skip("no mpiexec")
+    m = e2e.stented[0]
+    run_file = e2e.run_file(m)
+    serial = xr.load_dataset(run_file)
+    ok(_solve_again(e2e, m, "--set-resources", "solve:tasks=2", "--default-resources", f"mpi='{MPI_LAUNCHER}'"))
+    par = xr.load_dataset(run_file)
+    assert par.attrs["processes"] == 2 and serial.attrs["processes"] == 1
+    for name in ("outlet_flux", "stent_max_von_mises", "inlet_flux", "max_wall_displacement"):
+        a, b = par[name].values[1:], serial[name].values[1:]
+        rel = np.abs(a - b).max() / np.abs(b).max()
+        print(f"MPI 2 vs 1 process, {name}: max relative difference {rel:.2e}")
+        assert rel < 1e-8, (name, rel)
