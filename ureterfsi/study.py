@@ -30,7 +30,7 @@ from .fsi.problem import MonolithicFSI
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
 from .probes import CellField, PointProbe, assemble_scalar, von_mises
 from .provenance import atomic_path, provenance_attrs
-from .scenes.ureter import materials, pulse_centre, ureter_scene
+from .scenes.ureter import pulse_centre, ureter_scene
 
 log = logging.getLogger("ureterfsi.study")
 
@@ -71,7 +71,6 @@ class UreterProbes(Observer):
         J = ufl.det(F)
         N = ops.normal()
         n_da = J * ufl.inv(F).T * N
-        ax = 1 if self.axisymmetric else 2
         e_z = ufl.as_vector([0.0, 0.0, 1.0])
         rel = ops.vec(v) - ops.vec(w)
         ds, dx = pb.ds, pb.dx

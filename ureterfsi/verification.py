@@ -378,3 +378,20 @@ def pure_displacement_tube_inner_radius(tube: Tube, h, p0, degree=1, order=2, lo
     num = integrate(ufl.sqrt(ufl.dot(x, x)), mesh, dx=ds(1))
     den = integrate(fem.Constant(mesh, 1.0), mesh, dx=ds(1))
     return num / den
+
+
+def annulus_3d_errors(a: Annulus, h, options=None):
+    """Steady 3D annular Poiseuille on a gmsh mesh of size h: (tets, dofs, relative L2 error of v_z,
+    relative flux error)."""
+    from ureterfsi.fsi import MonolithicFSI
+
+    scene = annulus_3d_scene(a, h)
+    pb = MonolithicFSI(scene, options)
+    pb.solve_steady()
+    v = pb.field("velocity")
+    x = ufl.SpatialCoordinate(pb.mesh)
+    r = ufl.sqrt(x[0] ** 2 + x[1] ** 2)
+    err, ref = l2_error(v[2], a.velocity(r, log=ufl.ln), mesh=pb.mesh)
+    ds = ufl.Measure("ds", domain=pb.mesh, subdomain_data=scene.facet_tags, metadata={"quadrature_degree": 8})
+    flux = integrate(v[2], pb.mesh, dx=ds(2)) / a.flux() - 1.0
+    return scene.mesh.topology.index_map(3).size_global, dofs_count(pb), err / ref, flux

@@ -67,7 +67,6 @@ class MonolithicFSI:
         self.mesh = mesh
         self.comm = mesh.comm
         self.ops = ops = Operators(mesh, scene.axisymmetric)
-        tdim = mesh.topology.dim
         cell = mesh.ufl_cell()
 
         fluid_tags = tuple(scene.fluid.tags) if scene.fluid else ()
