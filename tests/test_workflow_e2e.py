@@ -117,9 +117,13 @@ def e2e(tmp_path_factory):
     print(f"\ne2e workflow run: {wall:.1f} s")
     sym, level = cfg["mesh"]["symmetry"], cfg["study"]["level"]
     models = sorted(cfg["models"], key=int)
+    stented = [m for m in models if cfg["models"][m]["stent"]]
+    run_file = lambda m: work / f"results/runs/{sym}/model{m}_{level}.nc"   # noqa: E731
+    # the uninterrupted 1-process run of the stented model, kept aside: the solve-again tests replace it
+    reference = tmp_path_factory.mktemp("e2e-reference") / "serial.nc"
+    shutil.copy2(run_file(stented[0]), reference)
     return SimpleNamespace(dir=work, cfg=cfg, cfg_path=cfg_path, log=log, wall=wall, symmetry=sym, level=level,
-                           models=models, stented=[m for m in models if cfg["models"][m]["stent"]],
-                           run_file=lambda m: work / f"results/runs/{sym}/model{m}_{level}.nc")
+                           models=models, stented=stented, run_file=run_file, reference=reference)
 
 
 def test_every_rule_ran(e2e):
@@ -198,6 +202,9 @@ def test_logs_and_benchmarks(e2e):
         assert (e2e.dir / f"results/logs/figures/{stem}.log").exists(), stem
     for name in ("models_coarse", "mesh_convergence"):
         assert (e2e.dir / f"results/logs/aggregate/{name}.log").exists()
+    if (REPO / "workflow/rules/calibration.smk").exists():
+        assert (e2e.dir / "results/logs/calibration/wall_calibration.log").exists()
+        assert (e2e.dir / "results/benchmarks/calibration/wall_calibration.tsv").exists()
     assert not list((e2e.dir / "results").rglob("*.npz")), "checkpoints are removed after a finished run"
 
 
@@ -246,8 +253,7 @@ def test_report_holds_every_figure(e2e):
         assert f"{stem}.png" in html, stem
     assert "table1.md" in html
     # captions are Jinja-rendered with the figure instants of the configuration
-    assert "{{" not in html.split("</script>")[-1] or True
-    assert "t = 0.04 s" in html or "t = 0.04" in html
+    assert "t = 0.04 s" in html and "snakemake.params" not in html
 
 
 def test_slurm_profile_plans_the_jobs(e2e, tmp_path):
@@ -276,7 +282,7 @@ def _solve_again(e2e, model, *args, **popen):
 def test_killed_solve_resumes_from_checkpoint(e2e):
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    reference = xr.load_dataset(run_file)          # the uninterrupted run of the module fixture
+    reference = xr.load_dataset(e2e.reference)     # the uninterrupted run of the module fixture
     ckpt_dir = e2e.dir / f"results/checkpoints/{e2e.symmetry}"
     proc = _solve_again(e2e, m, start_new_session=True)
     t0 = time.perf_counter()
@@ -293,27 +299,46 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
     first_log = log_path.read_text()
     assert "checkpoint: step 1" in first_log and "done in" not in first_log
 
+    # a SIGKILLed Snakemake leaves its lock behind (and the output marked incomplete): unlock, then run again
+    ok(snakemake(e2e.dir, e2e.cfg_path, "--unlock"))
     ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--rerun-incomplete",
                  f"results/runs/{e2e.symmetry}/model{m}_{e2e.level}.nc"))
     log = log_path.read_text()
     assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
     assert "initial state" not in log          # no fresh start
     resumed = xr.load_dataset(run_file)
+    # Up to the checkpoint the records come from the checkpoint: identical. After it, the resumed run
+    # factorises the Jacobian afresh where the uninterrupted one reused the factorisation of step 1
+    # (solver.reuse_jacobian; the factorisation is not checkpointed), so the Newton iterates differ within
+    # the Newton tolerance: measured 6e-10 relative on stent_max_von_mises at t = 0.04 s, < 1e-10 elsewhere.
+    t_ckpt = float(reference["time"].values[1])
     for name, var in reference.data_vars.items():
         if name == "step_wall_time":
             continue
-        np.testing.assert_allclose(resumed[name].values, var.values, rtol=1e-10, atol=1e-20, err_msg=name)
+        a, b = resumed[name].values, var.values
+        assert a.shape == b.shape, name
+        if "time" in var.dims or "probe_time" in var.dims:
+            times = reference["time" if "time" in var.dims else "probe_time"].values
+            axis = var.dims.index("time" if "time" in var.dims else "probe_time")
+            early = np.take(a, np.flatnonzero(times <= t_ckpt + 1e-12), axis=axis)
+            early_ref = np.take(b, np.flatnonzero(times <= t_ckpt + 1e-12), axis=axis)
+            np.testing.assert_allclose(early, early_ref, rtol=1e-12, atol=0, err_msg=name)
+        scale = max(np.abs(b[np.isfinite(b)]).max(initial=0.0), 1e-300)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-8 * scale, err_msg=name)   # newton_rtol
     assert not list(ckpt_dir.glob("*.npz"))
 
 
 @pytest.mark.mpi
+@pytest.mark.slow          # a third solve of the stented model (~1-2 min on a loaded 2-core machine)
 def test_solve_rule_under_mpi_matches_serial(e2e):
     if shutil.which("mpiexec") is None:
         pytest.skip("no mpiexec")
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    serial = xr.load_dataset(run_file)
-    ok(_solve_again(e2e, m, "--set-resources", "solve:tasks=2", "--default-resources", f"mpi='{MPI_LAUNCHER}'"))
+    serial = xr.load_dataset(e2e.reference)
+    # --set-resources, not --default-resources: the solve rule sets resources.mpi itself, and a rule's own
+    # resources take precedence over the defaults
+    ok(_solve_again(e2e, m, "--set-resources", "solve:tasks=2", f"solve:mpi='{MPI_LAUNCHER}'"))
     par = xr.load_dataset(run_file)
     assert par.attrs["processes"] == 2 and serial.attrs["processes"] == 1
     for name in ("outlet_flux", "stent_max_von_mises", "inlet_flux", "max_wall_displacement"):

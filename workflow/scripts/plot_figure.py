@@ -17,10 +17,11 @@ def models():
 def draw(rule: str):
     if rule == "fig02_domain":
         info = json.loads(open(smk.input.json).read())
-        label = smk.config["models"][str(info["model"])]["label"]
+        model = smk.config["models"][str(info["model"])]
+        what = f"{model['label']} between hole pairs" if model["stent"] else model["label"]
         return plotting.fig02_domain(
             smk.input.msh, hole_z=max(info["hole_pair_z"]) if info["hole_pair_z"] else None,
-            title=f"Model {info['model']} ({label} between hole pairs), {info['symmetry']} model, "
+            title=f"Model {info['model']} ({what}), {info['symmetry']} model, "
                   f"{format(info['cells_total'], ',').replace(',', ' ')} elements: mesh in the plane x = 0")
     if rule == "fig03_mesh_convergence":
         return plotting.fig03_mesh_convergence(aggregate.open_run(smk.input.conv))
