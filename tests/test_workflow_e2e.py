@@ -275,7 +275,8 @@ def test_slurm_profile_plans_the_jobs(e2e, tmp_path):
 
 def _solve_again(e2e, model, *args, **popen):
     target = f"results/runs/{e2e.symmetry}/model{model}_{e2e.level}.nc"
-    return snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--forcerun", "solve", *args, target, **popen)
+    # the target first: --forcerun and --set-resources take several values and would swallow it
+    return snakemake(e2e.dir, e2e.cfg_path, target, "--cores", "2", "--forcerun", "solve", *args, **popen)
 
 
 @pytest.mark.slow
@@ -316,6 +317,9 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
         if name == "step_wall_time":
             continue
         a, b = resumed[name].values, var.values
+        if name in ("newton_iterations", "newton_residual"):   # solver diagnostics: exact up to the checkpoint
+            np.testing.assert_array_equal(a[:1], b[:1], err_msg=name)
+            continue
         assert a.shape == b.shape, name
         if "time" in var.dims or "probe_time" in var.dims:
             times = reference["time" if "time" in var.dims else "probe_time"].values
