@@ -308,27 +308,12 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
     assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
     assert "initial state" not in log          # no fresh start
     resumed = xr.load_dataset(run_file)
-    # Up to the checkpoint the records come from the checkpoint: identical. After it, the resumed run
-    # factorises the Jacobian afresh where the uninterrupted one reused the factorisation of step 1
-    # (solver.reuse_jacobian; the factorisation is not checkpointed), so the Newton iterates differ within
-    # the Newton tolerance: measured 6e-10 relative on stent_max_von_mises at t = 0.04 s, < 1e-10 elsewhere.
-    t_ckpt = float(reference["time"].values[1])
+    # The integrator drops the cached factorisation at every checkpoint, so the resumed run repeats the
+    # uninterrupted run's arithmetic: identical results (wall times aside).
     for name, var in reference.data_vars.items():
         if name == "step_wall_time":
             continue
-        a, b = resumed[name].values, var.values
-        if name in ("newton_iterations", "newton_residual"):   # solver diagnostics: exact up to the checkpoint
-            np.testing.assert_array_equal(a[:1], b[:1], err_msg=name)
-            continue
-        assert a.shape == b.shape, name
-        if "time" in var.dims or "probe_time" in var.dims:
-            times = reference["time" if "time" in var.dims else "probe_time"].values
-            axis = var.dims.index("time" if "time" in var.dims else "probe_time")
-            early = np.take(a, np.flatnonzero(times <= t_ckpt + 1e-12), axis=axis)
-            early_ref = np.take(b, np.flatnonzero(times <= t_ckpt + 1e-12), axis=axis)
-            np.testing.assert_allclose(early, early_ref, rtol=1e-12, atol=0, err_msg=name)
-        scale = max(np.abs(b[np.isfinite(b)]).max(initial=0.0), 1e-300)
-        np.testing.assert_allclose(a, b, rtol=0, atol=1e-8 * scale, err_msg=name)   # newton_rtol
+        np.testing.assert_allclose(resumed[name].values, var.values, rtol=1e-12, atol=0, err_msg=name)
     assert not list(ckpt_dir.glob("*.npz"))
 
 

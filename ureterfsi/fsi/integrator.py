@@ -89,6 +89,9 @@ class TimeIntegrator:
                          cells=np.asarray(pb.mesh.topology.original_cell_index),
                          meta=np.array(json.dumps(meta)))
         log.info("checkpoint: step %d t=%.6g s -> %s", step, pb.time, self._checkpoint_file())
+        # A resumed run starts without the cached LU factorisation; drop it here too, so that the
+        # uninterrupted and the resumed run do the same arithmetic after the checkpoint.
+        pb.invalidate_jacobian()
 
     def has_checkpoint(self) -> bool:
         return bool(self.settings.checkpoint_path) and self._checkpoint_file().exists()

@@ -329,6 +329,10 @@ class MonolithicFSI:
         self._jacobian_valid = True
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
 
+    def invalidate_jacobian(self):
+        """Force a fresh Jacobian and factorisation at the next Newton iteration."""
+        self._jacobian_valid = False
+
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
