@@ -200,15 +200,15 @@ class MonolithicFSI:
         vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=self.mesh)))
         vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         k = fem.Function(Q, name="mesh_stiffness")
-        nloc = Q.dofmap.index_map.size_local
         cells = self._cells(fluid_tags)
-        cells = cells[cells < nloc]
-        local = vol.array[cells]
+        cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
+        dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
+        local = vol.array[dofs]
         total = self.comm.allreduce(local.sum(), MPI.SUM)
         count = self.comm.allreduce(local.size, MPI.SUM)
         vmean = total / max(count, 1)
         k.x.array[:] = 1.0
-        k.x.array[cells] = (vmean / local) ** self.options.mesh_stiffening
+        k.x.array[dofs] = (vmean / local) ** self.options.mesh_stiffening
         k.x.scatter_forward()
         return k
 
