@@ -320,8 +320,7 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
 @pytest.mark.mpi
 @pytest.mark.slow          # a third solve of the stented model (~1-2 min on a loaded 2-core machine)
 def test_solve_rule_under_mpi_matches_serial(e2e):
-    if shutil.which("mpiexec") is None:
-        pytest.skip("no mpiexec")
+    assert shutil.which("mpiexec"), "mpiexec missing: workflow/setup.sh installs mpi-default-bin"
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
     serial = xr.load_dataset(e2e.reference)

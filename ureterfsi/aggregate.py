@@ -106,21 +106,27 @@ def _clean_time(run: xr.Dataset) -> xr.Dataset:
     return run.isel(time=order[keep]).assign_coords(time=t_sorted[keep])
 
 
+def _runs_by(paths, attr: str) -> dict:
+    """Run files keyed by one attribute (model, mesh_level); a duplicate key or no file is an error."""
+    runs = {}
+    for p in paths:
+        run = open_run(p)
+        key = str(run.attrs[attr])
+        if key in runs:
+            raise ValueError(f"two runs with {attr} {key}: {runs[key].encoding.get('source')} and {p}")
+        run.encoding["source"] = str(p)
+        runs[key] = run
+    if not runs:
+        raise ValueError(f"no run file to combine by {attr}")
+    return runs
+
+
 def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> xr.Dataset:
     """Runs of one mesh level combined along `model` (see the module docstring).
 
     time_grid: "union" (every step time of every run) or "nominal" (0, dt, ..., end from cfg["time"]).
     """
-    runs = {}
-    for p in paths:
-        run = open_run(p)
-        m = str(run.attrs["model"])
-        if m in runs:
-            raise ValueError(f"two runs of model {m}: {runs[m].encoding.get('source')} and {p}")
-        run.encoding["source"] = str(p)
-        runs[m] = _clean_time(run)
-    if not runs:
-        raise ValueError("combine_models needs at least one run file")
+    runs = {m: _clean_time(run) for m, run in _runs_by(paths, "model").items()}
     levels = {str(r.attrs["mesh_level"]) for r in runs.values()}
     if len(levels) != 1:
         raise ValueError(f"runs of different mesh levels cannot be combined along model: {sorted(levels)}")
@@ -230,16 +236,7 @@ def _select_probe_time(run: xr.Dataset, time: float) -> xr.DataArray:
 
 def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
     """Mesh-convergence dataset (paper §3.1, Fig. 3) of runs of one model on several mesh levels."""
-    runs = {}
-    for p in paths:
-        run = open_run(p)
-        lv = str(run.attrs["mesh_level"])
-        if lv in runs:
-            raise ValueError(f"two runs on mesh level {lv}")
-        run.encoding["source"] = str(p)
-        runs[lv] = run
-    if not runs:
-        raise ValueError("combine_levels needs at least one run file")
+    runs = _runs_by(paths, "mesh_level")
     models = {str(r.attrs["model"]) for r in runs.values()}
     if len(models) != 1:
         raise ValueError(f"a convergence study is one model on several meshes, got models {sorted(models)}")

@@ -8,6 +8,7 @@ and the observers' records; a re-run with the same checkpoint path resumes from 
 """
 from __future__ import annotations
 
+import abc
 import json
 import logging
 import os
@@ -39,11 +40,12 @@ class TimeSettings:
     min_ale_jacobian: float = 0.0         # stop when the minimum ALE Jacobian falls to this value
 
 
-class Observer:
-    """Records quantities of interest after every accepted step (override `observe`)."""
+class Observer(abc.ABC):
+    """Records quantities of interest after every accepted step."""
 
-    def observe(self, problem: MonolithicFSI, step: int) -> None:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abc.abstractmethod
+    def observe(self, problem: MonolithicFSI, step: int) -> None:
+        """Called after the initial state (step 0) and after every accepted step."""
 
     def state(self) -> dict:
         """JSON-serialisable records, stored in checkpoints."""
