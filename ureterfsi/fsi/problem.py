@@ -47,8 +47,15 @@ class SolverOptions:
     newton_stol: float = 1e-11          # relative Newton increment ||dx|| / ||x||
     newton_max_iterations: int = 15
     reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
-    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
+    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this ...
+    reuse_patience: int = 0             # ... unless that contraction (< 0.9) reaches the tolerance within
+                                        # this many more iterations (0: always refactorise)
     linear_solver: str = "mumps"
+    # "monolithic": mesh-motion rows solved with the physics (needed whenever a solid moves the fluid
+    # boundary); "segregated": fluid-alone scenes whose boundary motion is prescribed - the mesh motion
+    # is a linear problem of its own (factorised once) solved before each step, and the Newton system
+    # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
+    mesh_motion_coupling: str = "monolithic"
 
 
 class NewtonDivergence(RuntimeError):
@@ -73,6 +80,11 @@ class MonolithicFSI:
         mr_tags = tuple(t for s in scene.solids if isinstance(s.material, MooneyRivlin) for t in s.tags)
         solid_tags = tuple(t for s in scene.solids for t in s.tags)
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
+        self.segregated = opts.mesh_motion_coupling == "segregated"
+        if opts.mesh_motion_coupling not in ("monolithic", "segregated"):
+            raise ValueError(f"mesh_motion_coupling 'monolithic' or 'segregated', got {opts.mesh_motion_coupling!r}")
+        if self.segregated and (solid_tags or not fluid_tags):
+            raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
 
         # --- mixed space --------------------------------------------------------------------
         elements = {"velocity": ufl.VectorElement("Lagrange", cell, opts.velocity_degree),
@@ -105,6 +117,14 @@ class MonolithicFSI:
             return (b0 * X[name] + b1 * Xn[name] + b2 * Xnm1[name]) / self.dt
 
         dvdt, dudt = ddt("velocity"), ddt("displacement")
+        if self.segregated:
+            # the mesh displacement is a known coefficient of the step: the fluid rows do not depend on
+            # the displacement unknowns, which mirror it through a Dirichlet condition on every dof
+            self.mesh_space, self._mesh_dofs = self.sub("displacement").collapse()
+            self.mesh_displacement = fem.Function(self.mesh_space, name="mesh_displacement")
+            b0, b1, b2 = self.bdf
+            u = self.mesh_displacement
+            dudt = (b0 * u + b1 * Xn["displacement"] + b2 * Xnm1["displacement"]) / self.dt
         self._dudt = dudt
         md = {"quadrature_degree": opts.quadrature_degree}
         self.dx = dx = ufl.Measure("dx", domain=mesh, subdomain_data=scene.cell_tags, metadata=md)
@@ -140,6 +160,7 @@ class MonolithicFSI:
         self.mesh_form = self.mesh_jacobian_form = None
         if fluid_tags:
             self.stiffness = self._cell_stiffness(fluid_tags)
+        if fluid_tags and not self.segregated:
             Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags))
             self.mesh_form = fem.form(Rm)
             self.mesh_jacobian_form = fem.form(ufl.derivative(Rm, self.x))
@@ -148,6 +169,8 @@ class MonolithicFSI:
         self._build_dirichlet()
         self._build_pins_and_interface(fluid_tags, solid_tags, mr_tags)
         self.bcs = self.dirichlet_bcs + self.pin_bcs
+        if self.segregated:
+            self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
         self.A = fem_petsc.create_matrix(self.jacobian_form)
@@ -169,7 +192,8 @@ class MonolithicFSI:
         pc.setFactorSolverType(opts.linear_solver)
         self.ksp.setFromOptions()
         self._jacobian_valid = False
-        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0}
+        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
+                        "mesh_motion": 0.0}
         self.counters = {"factorisations": 0, "reused_solves": 0}
         self.min_jacobian_expr = None
         if fluid_tags:
@@ -213,22 +237,36 @@ class MonolithicFSI:
         return k
 
     def _build_dirichlet(self):
-        """Scene Dirichlet conditions; time-dependent values are re-interpolated in `_update_bcs`."""
+        """Scene Dirichlet conditions; time-dependent values are re-interpolated in `_update_bcs`.
+        In segregated mode the displacement conditions constrain the mesh-motion problem instead, and
+        every displacement dof of the Newton system mirrors the mesh displacement."""
+        self.dirichlet_bcs, self.mesh_bcs, self._bc_updates = [], [], []
+        for cond in self.scene.dirichlet:
+            if self.segregated and cond.field == "displacement":
+                self.mesh_bcs += self._conditions(cond, self.mesh_space)
+            else:
+                self.dirichlet_bcs += self._conditions(cond, self.sub(cond.field))
+        if self.segregated:
+            dofs = [np.asarray(self._mesh_dofs, dtype=np.int32), np.arange(len(self._mesh_dofs), dtype=np.int32)]
+            self.dirichlet_bcs.append(fem.dirichletbc(self.mesh_displacement, dofs, self.sub("displacement")))
+
+    def _conditions(self, cond, base):
         fdim = self.mesh.topology.dim - 1
         ft = self.scene.facet_tags
-        self.dirichlet_bcs, self._bc_updates = [], []
-        for cond in self.scene.dirichlet:
-            facets = np.unique(np.concatenate([ft.find(t) for t in cond.tags])).astype(np.int32)
-            base = self.sub(cond.field)
-            comps = [None] if cond.components is None else list(cond.components)
-            for c in comps:
-                space = base if c is None else base.sub(c)
+        facets = np.unique(np.concatenate([ft.find(t) for t in cond.tags])).astype(np.int32)
+        bcs = []
+        for c in [None] if cond.components is None else list(cond.components):
+            space = base if c is None else base.sub(c)
+            if space.component():      # a subspace: the value lives in its collapsed space
                 collapsed, _ = space.collapse()
-                dofs = fem.locate_dofs_topological((space, collapsed), fdim, facets)
                 g = fem.Function(collapsed)
-                self.dirichlet_bcs.append(fem.dirichletbc(g, dofs, space))
-                if cond.value is not None:
-                    self._bc_updates.append((g, cond.value, c))
+                bcs.append(fem.dirichletbc(g, fem.locate_dofs_topological((space, collapsed), fdim, facets), space))
+            else:
+                g = fem.Function(space)
+                bcs.append(fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets)))
+            if cond.value is not None:
+                self._bc_updates.append((g, cond.value, c))
+        return bcs
 
     def _update_bcs(self, t):
         for g, value, comp in self._bc_updates:
@@ -266,6 +304,36 @@ class MonolithicFSI:
         offset = self.W.dofmap.index_map.local_range[0] * bs
         self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
         self._mesh_excluded_local = rows.astype(np.int32)
+
+    def _setup_mesh_motion(self, dx_fluid):
+        """Segregated mesh motion: the linear extension problem, assembled and factorised once."""
+        V = self.mesh_space
+        a = physics.mesh_motion_residual(self.ops, self.options.mesh_motion, ufl.TrialFunction(V),
+                                         ufl.TestFunction(V), self.stiffness, dx_fluid)
+        self._mesh_a = fem.form(a)
+        self._mesh_L = fem.form(ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())),
+                                          ufl.TestFunction(V)) * dx_fluid)
+        A = fem_petsc.assemble_matrix(self._mesh_a, bcs=self.mesh_bcs)
+        A.assemble()
+        self._mesh_A, self._mesh_b = A, fem_petsc.create_vector(self._mesh_L)
+        self._mesh_ksp = ksp = PETSc.KSP().create(self.comm)
+        ksp.setOperators(A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType(self.options.linear_solver)
+
+    def solve_mesh_motion(self):
+        """Mesh displacement of the current time from the prescribed boundary displacement."""
+        t0 = _time.perf_counter()
+        b = self._mesh_b
+        with b.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.apply_lifting(b, [self._mesh_a], [self.mesh_bcs])
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fem_petsc.set_bc(b, self.mesh_bcs)
+        self._mesh_ksp.solve(b, self.mesh_displacement.vector)
+        self.mesh_displacement.x.scatter_forward()
+        self.timings["mesh_motion"] += _time.perf_counter() - t0
 
     def _setup_ale_jacobian(self, u, fluid_tags):
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
@@ -333,6 +401,15 @@ class MonolithicFSI:
         """Force a fresh Jacobian and factorisation at the next Newton iteration."""
         self._jacobian_valid = False
 
+    def _reuse_reaches_tolerance(self, contraction, r, r0):
+        """A slow but steady contraction that meets the tolerance within `reuse_patience` iterations
+        costs less than a new factorisation (one factorisation ~ tens of reused solves in 3D)."""
+        o = self.options
+        if not o.reuse_patience or contraction >= 0.9:
+            return False
+        target = max(o.newton_atol, o.newton_rtol * r0)
+        return r <= target or math.log(target / r) / math.log(contraction) <= o.reuse_patience
+
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
@@ -351,7 +428,9 @@ class MonolithicFSI:
             if it == o.newton_max_iterations:
                 break
             contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            fresh = not (o.reuse_jacobian and self._jacobian_valid and contraction < o.reuse_contraction)
+            fresh = not (o.reuse_jacobian and self._jacobian_valid
+                         and (contraction < o.reuse_contraction
+                              or self._reuse_reaches_tolerance(contraction, r, r0)))
             if fresh:
                 self._assemble_jacobian()
                 self.ksp.setOperators(self.A)
@@ -386,6 +465,8 @@ class MonolithicFSI:
         t_new = self.time + dt
         self.t.value = t_new
         self._update_bcs(t_new)
+        if self.segregated:
+            self.solve_mesh_motion()
         self.x.x.array[:] = self.x_n.x.array      # predictor: previous state
         try:
             its, history = self.newton()
@@ -410,6 +491,8 @@ class MonolithicFSI:
             const.value = 0.0
         self.t.value = self.time
         self._update_bcs(self.time)
+        if self.segregated:
+            self.solve_mesh_motion()
         its, history = self.newton()
         self.x_n.x.array[:] = self.x.x.array
         self.x_nm1.x.array[:] = self.x.x.array
