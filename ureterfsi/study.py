@@ -34,6 +34,7 @@ from .scenes.ureter import pulse_centre, ureter_scene
 
 log = logging.getLogger("ureterfsi.study")
 
+FIDELITIES = ("fully_coupled", "one_way")   # rungs of the fidelity ladder a run can use
 HOLE_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.5}   # share of each hole inside the model
 N_LINE, N_HOLE = 201, 21
 
@@ -56,10 +57,49 @@ def solver_options(cfg: dict) -> SolverOptions:
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"])
 
 
-class UreterProbes(Observer):
-    """Records the study's quantities of interest after every accepted step."""
+class CoupledWall:
+    """Ureter outer-wall radial displacement read from the coupled state (material points on the
+    outer surface, x = R_o, y = 0, or (r, z) = (R_o, z))."""
 
-    def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times):
+    def __init__(self, pb: MonolithicFSI, z: np.ndarray, outer_radius: float):
+        pts = (np.c_[np.full_like(z, outer_radius), z] if pb.scene.axisymmetric
+               else np.c_[np.full_like(z, outer_radius), np.zeros_like(z), z])
+        self.pb, self.probe = pb, PointProbe(pb.mesh, pts)
+        self.displacement = fem.Function(pb.W.sub(pb.index["displacement"]).collapse()[0])
+
+    def radial_displacement(self, time: float) -> np.ndarray:
+        self.displacement.x.array[:] = self.pb.field("displacement").x.array
+        return self.probe(self.displacement)[:, 0]
+
+
+class CoupledStent:
+    """Stent von Mises stress from the coupled state: sigma(u) of the stent material on the stent cells
+    (Cauchy stress sigma = J^-1 P F^T for the geometrically nonlinear option, paper eq. 15)."""
+
+    def __init__(self, pb: MonolithicFSI, probe_points: np.ndarray):
+        stent = next(s.material for s in pb.scene.solids if tags.STENT in s.tags)
+        u = pb.split()["displacement"]
+        sigma = physics.elastic_first_piola(pb.ops, stent, u)
+        if stent.kinematics != "linear":
+            F = physics.deformation_gradient(pb.ops, u)
+            sigma = sigma * F.T / ufl.det(F)
+        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb._cells([tags.STENT]))
+        self.probe = PointProbe(pb.mesh, probe_points)
+
+    def update(self, pb: MonolithicFSI) -> None:
+        self.von_mises.update()
+
+
+class UreterProbes(Observer):
+    """Records the study's quantities of interest after every accepted step.
+
+    The fluid quantities come from the problem `pb` (fully coupled, or the fluid alone on its part of
+    the mesh); the outer-wall displacement and the stent stress from `wall` and `stent` providers
+    (default: read from the coupled state; the one-way rung passes its own, see ureterfsi.oneway).
+    """
+
+    def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times,
+                 wall=None, stent=None):
         self.pb, self.cfg, self.symmetry = pb, cfg, symmetry
         self.geom = g = UreterGeometry.from_config(cfg)
         self.axisymmetric = pb.scene.axisymmetric
@@ -85,23 +125,14 @@ class UreterProbes(Observer):
         self.comm = comm
         self.fraction = {"full": 1.0, "half": 2.0, "quarter": 4.0, "axisymmetric": 1.0}[symmetry]
 
-        # wall displacement along the outer surface (x = R_o, y = 0 or (r, z) = (R_o, z))
         z = np.linspace(0.0, g.length, N_LINE)
         self.z = z
-        line = (np.c_[np.full_like(z, g.ureter_outer_radius), z] if self.axisymmetric
-                else np.c_[np.full_like(z, g.ureter_outer_radius), np.zeros_like(z), z])
-        self.wall_probe = PointProbe(mesh, line)
-        self.displacement = fem.Function(pb.W.sub(pb.index["displacement"]).collapse()[0])
+        self.wall = wall or CoupledWall(pb, z, g.ureter_outer_radius)
         self.velocity = fem.Function(pb.W.sub(pb.index["velocity"]).collapse()[0])
 
         self.has_stent = model.stent and not self.axisymmetric
         if self.has_stent:
-            stent = pb.scene.solids[1].material
-            sigma = physics.elastic_first_piola(ops, stent, u)
-            if stent.kinematics != "linear":   # Cauchy stress sigma = J^-1 P F^T (paper eq. 15)
-                sigma = sigma * F.T / J
-            self.stent_vm = CellField(mesh, von_mises(sigma), 1, pb._cells([tags.STENT]))
-            self.stent_probe = PointProbe(mesh, np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
+            self.stent = stent or CoupledStent(pb, np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
             # holes: channel cells (fluid, r_i < R < r_o) grouped by pair position and side
             self.hole_z = hole_pair_positions(g, model)
             sides = [1.0] if symmetry == "quarter" else [1.0, -1.0]
@@ -156,12 +187,11 @@ class UreterProbes(Observer):
         s["inlet_flux"].append(self.fraction * val["inlet_flux"])
         s["outlet_mean_axial_velocity"].append(val["outlet_axial_velocity_integral"] / val["outlet_area"])
         s["fluid_volume"].append(self.fraction * val["fluid_volume"])
-        self.displacement.x.array[:] = pb.field("displacement").x.array
-        wall = self.wall_probe(self.displacement)
-        s["max_wall_displacement"].append(float(np.nanmax(np.abs(wall[:, 0]))))
+        wall = self.wall.radial_displacement(pb.time)
+        s["max_wall_displacement"].append(float(np.nanmax(np.abs(wall))))
         if self.has_stent:
-            self.stent_vm.update()
-            vmax, where = self.stent_vm.maximum()
+            self.stent.update(pb)
+            vmax, where = self.stent.von_mises.maximum()
             s["stent_max_von_mises"].append(vmax)
             for c, name in zip(where, "xyz"):
                 s[f"stent_max_von_mises_{name}"].append(c)
@@ -175,9 +205,10 @@ class UreterProbes(Observer):
             s["hole_flux"].append((flux / HOLE_FRACTION[self.symmetry]).tolist())
         if any(abs(pb.time - t) < 1e-9 for t in self.probe_times):
             self.snapshot_times.append(pb.time)
-            self.snapshots["wall_radial_displacement"].append(wall[:, 0].tolist())
+            self.snapshots["wall_radial_displacement"].append(wall.tolist())
             if self.has_stent:
-                self.snapshots["stent_von_mises_line"].append(self.stent_probe(self.stent_vm.function)[:, 0].tolist())
+                self.snapshots["stent_von_mises_line"].append(
+                    self.stent.probe(self.stent.von_mises.function)[:, 0].tolist())
                 self.velocity.x.array[:] = pb.field("velocity").x.array
                 self.snapshots["hole_velocity_y"].append(self.hole_probe(self.velocity)[:, 1].tolist())
 
@@ -232,7 +263,8 @@ def _cf(da: xr.DataArray, name: str) -> xr.DataArray:
     return da
 
 
-def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_attrs: dict) -> xr.Dataset:
+def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_attrs: dict,
+                   fidelity: str = "fully_coupled") -> xr.Dataset:
     """Assemble the run's probe records into a CF-annotated dataset."""
     t = np.asarray(obs.series["time"])
     ds = xr.Dataset(coords={"time": _cf(xr.DataArray(t, dims="time"), "time")})
@@ -263,7 +295,7 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     for name, values in steps.items():
         ds[name] = _cf(xr.DataArray(np.asarray(values), dims="step"), name)
     ds.attrs.update(provenance_attrs(cfg, model=spec.model, mesh_level=spec.level, symmetry=spec.symmetry,
-                                     fidelity="fully_coupled", **extra_attrs))
+                                     fidelity=fidelity, **extra_attrs))
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi probes, model {spec.model}, mesh {spec.level} ({spec.symmetry})"
     return ds
@@ -334,7 +366,7 @@ def main(argv=None) -> int:
     from .config import ConfigError, load_config, load_config_files
 
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
-                                 description="Fully coupled FSI solve of one stent model on one mesh.")
+                                 description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
     ap.add_argument("--config-json", default=None, help="the whole configuration as JSON (from Snakemake)")
     ap.add_argument("--model", required=True)
@@ -345,6 +377,8 @@ def main(argv=None) -> int:
     ap.add_argument("--checkpoint", default=None, help="checkpoint path (resumes if present)")
     ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
     ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
+    ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
+                    help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, ureterfsi.oneway)")
     args = ap.parse_args(argv)
     configure_logging()
     try:
@@ -357,7 +391,12 @@ def main(argv=None) -> int:
         print(err, file=sys.stderr)
         return 2
     spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt)
-    run(cfg, spec, args.out, args.checkpoint)
+    if args.fidelity == "one_way":
+        from . import oneway
+
+        oneway.run(cfg, spec, args.out, args.checkpoint)
+    else:
+        run(cfg, spec, args.out, args.checkpoint)
     return 0
 
 

@@ -106,3 +106,28 @@ def ureter_scene(cfg: dict, mesh, cell_tags, facet_tags, axisymmetric: bool = Fa
         axisymmetric=axisymmetric,
         name="ureter",
     )
+
+
+def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement, wall_velocity,
+                       axisymmetric: bool = False) -> Scene:
+    """The urine alone on the fluid part of a model's mesh (one-way rung, ureterfsi.oneway): the inner
+    ureter wall moves as prescribed (callables of (x, t)), the stent surfaces are held still, open
+    inlet/outlet at the reference pressure (eq. 5), mesh fixed on the open faces, mirror planes / axis."""
+    urine, _, _ = materials(cfg)
+    dirichlet = [DirichletCondition("velocity", [tags.FLUID_URETER], wall_velocity),
+                 DirichletCondition("displacement", [tags.FLUID_URETER], wall_displacement)]
+    facet_present = set(mesh.comm.allreduce(sorted(set(int(v) for v in facet_tags.values))))
+    if tags.FLUID_STENT in facet_present:
+        dirichlet += [DirichletCondition("velocity", [tags.FLUID_STENT]),
+                      DirichletCondition("displacement", [tags.FLUID_STENT])]
+    dirichlet.append(DirichletCondition("displacement", [tags.INLET, tags.OUTLET]))
+    mirror = [(tags.AXIS, 0)] if axisymmetric else [(tags.SYMMETRY_X, 0), (tags.SYMMETRY_Y, 1)]
+    for tag, comp in mirror:
+        if tag in facet_present:
+            dirichlet += [DirichletCondition("velocity", [tag], components=[comp]),
+                          DirichletCondition("displacement", [tag], components=[comp])]
+    f = cfg["fluid"]
+    return Scene(mesh, cell_tags, facet_tags, fluid=FluidRegion([tags.FLUID], urine),
+                 open_boundaries=[OpenBoundary([tags.INLET, tags.OUTLET], normal_stress=f["reference_pressure"],
+                                               backflow=f["backflow_stabilisation"])],
+                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine")

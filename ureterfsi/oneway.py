@@ -1,0 +1,361 @@
+"""One-way coupled rung of the fidelity ladder: wall -> urine -> stent (issue 5).
+
+The fully coupled model (ureterfsi.study) solves wall, urine and stent in one Newton system. This rung
+solves them in sequence, each with the engine's own physics blocks:
+
+1. **wall**: the ureter wall alone in the axisymmetric r-z formulation (exact for the wall of every
+   model: the geometry and the load are axisymmetric), Mooney-Rivlin with inertia, travelling
+   Gaussian load (ureterfsi.calibration.WallModel); its inner- and outer-surface motion is recorded
+   at every step. Neglected: the urine pressure on the inner wall, |p - p_ref| against the 5e4 Pa load
+   (measured in the fluid step and stored as `one_way_max_wall_pressure_deviation`).
+2. **urine**: the fluid alone on the fluid part of the 3D mesh, ALE, with the recorded inner-wall
+   motion prescribed (velocity and mesh displacement) and the stent held rigid; the mesh motion is
+   segregated (a linear problem factorised once).
+3. **stent**: quasi-static linear elasticity on the stent part of the mesh, loaded by the urine's
+   consistent nodal reaction forces on the fluid-stent interface (the residual of the fluid equations
+   at the interface velocity dofs); stiffness matrix factorised once. Neglected: the stent deformation
+   in the fluid domain (`one_way_max_stent_displacement` against the hole diameter) and the stent
+   inertia (first bending frequency of the clamped 50 mm silicone tube ~46 Hz against the ~2 Hz of
+   the load: dynamic amplification < 0.2 %).
+"""
+from __future__ import annotations
+
+import logging
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from . import tags
+from .fsi import Observer, physics
+from .fsi.operators import Operators
+from .fsi.problem import MonolithicFSI
+from .fsi.submesh import SubDomain
+from .probes import CellField, PointProbe, von_mises
+
+log = logging.getLogger("ureterfsi.oneway")
+
+
+# ------------------------------------------------------------------------------------------------
+# 1. wall
+# ------------------------------------------------------------------------------------------------
+@dataclass
+class WallHistory:
+    """Recorded motion of the ureter wall surfaces (r-z solve): arrays (time, z)."""
+    time: np.ndarray
+    z_inner: np.ndarray
+    inner_ur: np.ndarray
+    inner_uz: np.ndarray
+    inner_vr: np.ndarray
+    inner_vz: np.ndarray
+    z_outer: np.ndarray
+    outer_ur: np.ndarray
+    wall_time: float = 0.0
+
+    def _at(self, field, zs, z, t):
+        """Linear interpolation in time between recorded steps and in z along the surface."""
+        k = int(np.clip(np.searchsorted(self.time, t), 1, len(self.time) - 1))
+        t0, t1 = self.time[k - 1], self.time[k]
+        a = 0.0 if t1 == t0 else float(np.clip((t - t0) / (t1 - t0), 0.0, 1.0))
+        row = (1.0 - a) * field[k - 1] + a * field[k]
+        return np.interp(z, zs, row)
+
+    def inner(self, z, t):
+        """(u_r, u_z, v_r, v_z) of the inner wall at axial positions z and time t."""
+        return tuple(self._at(f, self.z_inner, z, t)
+                     for f in (self.inner_ur, self.inner_uz, self.inner_vr, self.inner_vz))
+
+    def outer_radial(self, z, t):
+        return self._at(self.outer_ur, self.z_outer, z, t)
+
+
+class _SurfaceRecorder(Observer):
+    """Observer of the r-z wall solve: inner/outer surface displacement and velocity each step."""
+
+    def __init__(self, model):
+        pb = model.problem
+        self.pb = pb
+        self.U, self.umap = pb.sub("displacement").collapse()
+        self.V, self.vmap = pb.sub("velocity").collapse()
+        xu, xv = self.U.tabulate_dof_coordinates(), self.V.tabulate_dof_coordinates()
+        tol = 1e-9 * model.length
+
+        def nodes(coords, r):
+            idx = np.flatnonzero(np.isclose(coords[:, 0], r, atol=tol))
+            return idx[np.argsort(coords[idx, 1])]
+
+        self.iu, self.iv = nodes(xu, model.Ri), nodes(xv, model.Ri)
+        self.ou = nodes(xu, model.Ro)
+        self.z_inner, self.z_outer = xu[self.iu, 1], xu[self.ou, 1]
+        assert np.allclose(self.z_inner, xv[self.iv, 1])
+        self.rows = {k: [] for k in ("time", "iur", "iuz", "ivr", "ivz", "our")}
+
+    def observe(self, problem, step):
+        x = self.pb.x.x.array
+        u = x[self.umap].reshape(-1, 2)
+        v = x[self.vmap].reshape(-1, 2)
+        r = self.rows
+        r["time"].append(problem.time)
+        r["iur"].append(u[self.iu, 0].copy())
+        r["iuz"].append(u[self.iu, 1].copy())
+        r["ivr"].append(v[self.iv, 0].copy())
+        r["ivz"].append(v[self.iv, 1].copy())
+        r["our"].append(u[self.ou, 0].copy())
+
+    def state(self):
+        return {}
+
+    def load_state(self, state):
+        pass
+
+
+def wall_history(cfg: dict, end: float, dt: float, nr: int = 4) -> WallHistory:
+    """Transient r-z wall-alone solve over [0, end] with step dt (from rest, load ramped)."""
+    from .calibration import WallModel
+    from .fsi import SolverOptions, TimeIntegrator, TimeSettings
+
+    t0 = _time.perf_counter()
+    model = WallModel(cfg, nr=nr, travelling=True,
+                      options=SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25,
+                                            reuse_jacobian=True, reuse_contraction=0.3))
+    rec = _SurfaceRecorder(model)
+    TimeIntegrator(model.problem, TimeSettings(end=end, dt=dt, output_times=cfg["time"]["probe_times"],
+                                               max_halvings=cfg["solver"]["max_step_halvings"]),
+                   observers=[rec]).run()
+    r = {k: np.asarray(v) for k, v in rec.rows.items()}
+    hist = WallHistory(r["time"], rec.z_inner, r["iur"], r["iuz"], r["ivr"], r["ivz"], rec.z_outer, r["our"],
+                       _time.perf_counter() - t0)
+    log.info("wall (r-z, %d x %d cells, %d steps): max outer radial displacement %.4e m, %.1f s",
+             model.nr, model.nz, len(hist.time) - 1, hist.outer_ur.max(), hist.wall_time)
+    return hist
+
+
+class RecordedWall:
+    """Outer-wall radial displacement along the probe line from the recorded wall motion."""
+
+    def __init__(self, history: WallHistory, z: np.ndarray):
+        self.history, self.z = history, z
+
+    def radial_displacement(self, time: float) -> np.ndarray:
+        return self.history.outer_radial(self.z, time)
+
+
+# ------------------------------------------------------------------------------------------------
+# 2. urine: boundary data of the fluid-alone scene
+# ------------------------------------------------------------------------------------------------
+def inner_wall_motion(history: WallHistory, axisymmetric: bool):
+    """(displacement(x, t), velocity(x, t)) callables of the inner wall for DirichletConditions: the
+    r-z motion mapped to 3D, u = u_r e_r + u_z e_z (e_r = (x, y)/R)."""
+
+    def field(x, t, which):
+        ur, uz, vr, vz = history.inner(x[1] if axisymmetric else x[2], t)
+        a, b = (ur, uz) if which == "u" else (vr, vz)
+        if axisymmetric:
+            return np.vstack([a, b])
+        R = np.maximum(np.hypot(x[0], x[1]), 1e-12)
+        return np.vstack([a * x[0] / R, a * x[1] / R, b])
+
+    return (lambda x, t: field(x, t, "u")), (lambda x, t: field(x, t, "v"))
+
+
+# ------------------------------------------------------------------------------------------------
+# 3. stent
+# ------------------------------------------------------------------------------------------------
+class QuasiStaticStent:
+    """Linear elastic stent under the urine's interface forces, K u = f(t), K factorised once.
+
+    f at the fluid-stent interface nodes is minus the fluid residual at the interface velocity dofs
+    (the consistent reaction: the force the urine exerts on the stent, paper eqs. 22-24); the
+    interface nodes of the two submeshes coincide (conforming parent mesh, P2 on both sides)."""
+
+    def __init__(self, stent: SubDomain, material, fluid_pb: MonolithicFSI, symmetric_planes: bool,
+                 probe_points: np.ndarray):
+        if material.kinematics != "linear":
+            raise ValueError("the one-way stent is linear elastic (stent.kinematics: linear)")
+        msh = stent.mesh
+        self.mesh, self.fluid = msh, fluid_pb
+        self.ops = ops = Operators(msh, False)
+        V = fem.VectorFunctionSpace(msh, ("Lagrange", fluid_pb.options.velocity_degree))
+        self.V = V
+        self.u = fem.Function(V, name="stent_displacement")
+        dx = ufl.Measure("dx", domain=msh, metadata={"quadrature_degree": fluid_pb.options.quadrature_degree})
+        a = physics.elastic_residual(ops, material, ufl.TrialFunction(V), ufl.TestFunction(V), dx)
+        fdim = msh.topology.dim - 1
+        ft = stent.facet_tags
+        bcs = [fem.dirichletbc(np.zeros(3), fem.locate_dofs_topological(V, fdim, ft.find(tags.STENT_ENDS)), V)]
+        if symmetric_planes:
+            for tag, comp in ((tags.SYMMETRY_X, 0), (tags.SYMMETRY_Y, 1)):
+                facets = ft.find(tag)
+                if facets.size:
+                    Vc, _ = V.sub(comp).collapse()
+                    dofs = fem.locate_dofs_topological((V.sub(comp), Vc), fdim, facets)
+                    bcs.append(fem.dirichletbc(fem.Function(Vc), dofs, V.sub(comp)))
+        self.bcs = bcs
+        A = fem_petsc.assemble_matrix(fem.form(a), bcs=bcs)
+        A.assemble()
+        self.ksp = ksp = PETSc.KSP().create(msh.comm)
+        ksp.setOperators(A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType(fluid_pb.options.linear_solver)
+        self.f = self.u.vector.duplicate()
+        self._match_interface(stent)
+        self.von_mises = CellField(msh, von_mises(physics.elastic_first_piola(ops, material, self.u)), 1)
+        self.probe = PointProbe(msh, probe_points)
+        self.residual = fem_petsc.create_vector(fluid_pb.residual_form)
+        self.max_displacement = 0.0
+        self.wall_time = 0.0
+
+    def _match_interface(self, stent: SubDomain):
+        """Pairs (fluid velocity dof, stent displacement dof) of the interface nodes, by coordinates."""
+        pb = self.fluid
+        fdim = self.mesh.topology.dim - 1
+        Vf, vmap = pb.sub("velocity").collapse()
+        vmap = np.asarray(vmap).reshape(-1, 3)
+        f_nodes = fem.locate_dofs_topological(Vf, fdim, pb.scene.facet_tags.find(tags.FLUID_STENT))
+        s_nodes = fem.locate_dofs_topological(self.V, fdim, stent.facet_tags.find(tags.FLUID_STENT))
+        xf = Vf.tabulate_dof_coordinates()[f_nodes]
+        xs = self.V.tabulate_dof_coordinates()[s_nodes]
+        scale = 1e-9 * max(np.abs(xs).max(), 1e-300)
+        key = {tuple(np.round(p / scale).astype(np.int64)): n for p, n in zip(xs, s_nodes)}
+        pairs = [(fn, key.get(tuple(np.round(p / scale).astype(np.int64)))) for p, fn in zip(xf, f_nodes)]
+        missing = sum(1 for _, sn in pairs if sn is None)
+        if missing or len(pairs) != len(s_nodes):
+            raise RuntimeError(f"fluid-stent interface nodes do not match ({missing} of {len(pairs)} unpaired, "
+                               f"{len(s_nodes)} on the stent side)")
+        self.fluid_dofs = vmap[[fn for fn, _ in pairs]]                      # (n, 3) dofs of the mixed space
+        self.stent_dofs = 3 * np.array([sn for _, sn in pairs])[:, None] + np.arange(3)
+
+    def update(self, pb: MonolithicFSI) -> None:
+        """Solve for the stent displacement under the current urine state; refresh the stress."""
+        t0 = _time.perf_counter()
+        r = self.residual
+        with r.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.assemble_vector(r, pb.residual_form)
+        r.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        f = self.f
+        with f.localForm() as loc:
+            loc.set(0.0)
+        f.array_w[self.stent_dofs.ravel()] = -r.array_r[self.fluid_dofs.ravel()]
+        fem_petsc.set_bc(f, self.bcs)
+        self.ksp.solve(f, self.u.vector)
+        self.u.x.scatter_forward()
+        self.max_displacement = max(self.max_displacement,
+                                    float(np.max(np.linalg.norm(self.u.x.array.reshape(-1, 3), axis=1))))
+        self.von_mises.update()
+        self.wall_time += _time.perf_counter() - t0
+
+    def interface_force(self) -> np.ndarray:
+        """Total force (N) of the urine on the stent (sum of the nodal forces), for checks."""
+        return self.f.array_r[self.stent_dofs].sum(axis=0)
+
+
+# ------------------------------------------------------------------------------------------------
+# the run
+# ------------------------------------------------------------------------------------------------
+def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
+    """One-way solve of one model on one mesh (serial); writes the same probe dataset as the fully
+    coupled run (ureterfsi.study.run), with fidelity "one_way" and the one-way diagnostics."""
+    import dataclasses
+
+    from mpi4py import MPI
+
+    from .fsi import TimeIntegrator, TimeSettings
+    from .fsi.submesh import extract
+    from .geometry import StentModel, UreterGeometry
+    from .mesh import load_mesh
+    from .provenance import atomic_path
+    from .scenes.ureter import materials, ureter_fluid_scene
+    from .study import N_LINE, UreterProbes, probes_dataset, solver_options
+
+    wall0 = _time.perf_counter()
+    comm = MPI.COMM_WORLD
+    if comm.size > 1:
+        raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
+    tcfg = cfg["time"]
+    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"],
+                            output_times=tcfg["probe_times"], max_halvings=cfg["solver"]["max_step_halvings"],
+                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
+                            checkpoint_path=checkpoint_path)
+    history = wall_history(cfg, settings.end, settings.dt)
+
+    axisymmetric = spec.symmetry == "axisymmetric"
+    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
+    fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
+    u_wall, v_wall = inner_wall_motion(history, axisymmetric)
+    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric)
+    options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
+    pb = MonolithicFSI(scene, options)
+
+    g = UreterGeometry.from_config(cfg)
+    model = StentModel.from_config(cfg, spec.model)
+    z = np.linspace(0.0, g.length, N_LINE)
+    stent = None
+    if model.stent and not axisymmetric:
+        _, _, stent_material = materials(cfg)
+        stent = QuasiStaticStent(extract(mesh, cell_tags, facet_tags, [tags.STENT]), stent_material, pb,
+                                 spec.symmetry != "full", np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
+    ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
+    ncells = mesh.topology.index_map(mesh.topology.dim).size_global
+    log.info("one-way model %s, mesh %s (%s): %d cells (%d fluid), %d fluid dofs, setup %.1f s", spec.model,
+             spec.level, spec.symmetry, ncells, fluid.mesh.topology.index_map(fluid.mesh.topology.dim).size_global,
+             ndofs, _time.perf_counter() - wall0)
+    obs = UreterProbes(pb, cfg, model, spec.symmetry, tcfg["probe_times"], wall=RecordedWall(history, z), stent=stent)
+    guard = WallPressure(pb, cfg["fluid"]["reference_pressure"])
+    integrator = TimeIntegrator(pb, settings, [obs, guard])
+    if not integrator.has_checkpoint():
+        its, hist = pb.solve_steady()
+        log.info("initial state: urine at rest at the reference pressure, %d Newton iterations, residual %.2e",
+                 its, hist[-1])
+    records = integrator.run()
+    wall = _time.perf_counter() - wall0
+    extra = {
+        "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
+        "time_step_s": settings.dt, "end_time_s": settings.end,
+        "solver": (f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
+                   f"P2-P1, segregated mesh motion, BDF2, Newton + {cfg['solver']['linear_solver']}) -> "
+                   f"quasi-static linear stent (LU once)"),
+        "timings": {k: round(v, 2) for k, v in pb.timings.items()},
+        "wall_solve_time_s": round(history.wall_time, 2),
+        "one_way_max_wall_pressure_deviation": guard.max_deviation,
+        "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
+    }
+    if stent is not None:
+        extra.update(one_way_max_stent_displacement=stent.max_displacement,
+                     one_way_hole_diameter=g.hole_radius * 2, stent_solve_time_s=round(stent.wall_time, 2))
+    ds = probes_dataset(obs, records, cfg, spec, extra, fidelity="one_way")
+    with atomic_path(out_path) as tmp:
+        ds.to_netcdf(tmp)
+    integrator.remove_checkpoint()
+    log.info("done in %.1f s -> %s (max |p - p_ref| on the wall %.1f Pa vs load %.0f Pa%s)", wall, out_path,
+             guard.max_deviation, cfg["peristalsis"]["peak_traction"],
+             f"; max stent displacement {stent.max_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
+             if stent is not None else "")
+    return ds
+
+
+class WallPressure(Observer):
+    """Largest |p - p_ref| of the urine on the ureter wall: the load the one-way rung leaves out."""
+
+    def __init__(self, pb: MonolithicFSI, reference_pressure: float):
+        P, self.pmap = pb.sub("pressure").collapse()
+        fdim = pb.mesh.topology.dim - 1
+        self.dofs = np.asarray(self.pmap)[fem.locate_dofs_topological(
+            P, fdim, pb.scene.facet_tags.find(tags.FLUID_URETER))]
+        self.pb, self.p_ref, self.max_deviation = pb, reference_pressure, 0.0
+
+    def observe(self, problem, step):
+        if self.dofs.size:
+            dev = float(np.max(np.abs(self.pb.x.x.array[self.dofs] - self.p_ref)))
+            self.max_deviation = max(self.max_deviation, dev)
+
+    def state(self):
+        return {"max_deviation": self.max_deviation}
+
+    def load_state(self, state):
+        self.max_deviation = state["max_deviation"]
