@@ -45,3 +45,28 @@ rule aggregate_convergence:
     threads: 1
     script:
         "../scripts/aggregate_convergence.py"
+
+
+# Grid Convergence Index (Celik et al. 2008) of the mesh-convergence study: peak outlet flux, peak maximum
+# stent von Mises stress and the probe-line stress at GCI_POINTS_Z, from the three finest levels
+# (ureterfsi.gci). h = (V/N)^(1/3) with V the analytic volume of the mesh (the same on every level; read from
+# the last level's mesh sidecar). Needs at least three mesh levels (all_figures asks for it only then).
+# probe-line points: a quarter, half and three quarters of the segment (12.5, 25, 37.5 mm for L = 50 mm)
+GCI_POINTS_Z = [round(f * float(config["geometry"]["length"]), 9) for f in (0.25, 0.5, 0.75)]
+GCI_SAFETY_FACTOR = 1.25                 # Celik et al. 2008, three grids
+
+
+rule gci:
+    input:
+        conv="results/datasets/mesh_convergence.nc",
+        mesh=mesh_sidecar(CONVERGENCE_MODEL, LEVELS[-1]),
+    output:
+        "results/datasets/mesh_convergence_gci.nc",
+    params:
+        points_z=GCI_POINTS_Z,
+        safety_factor=GCI_SAFETY_FACTOR,
+    log:
+        "results/logs/aggregate/mesh_convergence_gci.log",
+    threads: 1
+    script:
+        "../scripts/gci.py"

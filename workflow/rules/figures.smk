@@ -177,6 +177,19 @@ rule table1:
         "../scripts/plot_figure.py"
 
 
+rule table_gci:
+    # Grid Convergence Index of the mesh-convergence study (ureterfsi.gci; beyond the paper)
+    input:
+        gci=rules.gci.output[0],
+    output:
+        csv="results/figures/table_gci.csv",
+        md=report("results/figures/table_gci.md", caption="../report/table_gci.rst", category="Paper figures"),
+    log:
+        "results/logs/figures/table_gci.log",
+    script:
+        "../scripts/gci.py"
+
+
 rule all_figures:
     input:
         rules.fig02_domain.output,
@@ -190,3 +203,4 @@ rule all_figures:
         rules.fig10_stent_von_mises.output,
         rules.fig11_hole_flux.output,
         rules.table1.output,
+        *(rules.table_gci.output if len(LEVELS) >= 3 else []),   # the GCI needs three mesh levels

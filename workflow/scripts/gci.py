@@ -1,0 +1,39 @@
+"""Snakemake script of rules `gci` (workflow/rules/aggregate.smk: mesh-convergence dataset -> GCI dataset) and
+`table_gci` (workflow/rules/figures.smk: GCI dataset -> CSV and Markdown table), both via ureterfsi.gci
+(Grid Convergence Index, Celik et al. 2008). Outputs are written atomically."""
+import logging
+
+from ureterfsi.aggregate import open_run, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi import gci
+
+smk = snakemake  # noqa: F821
+logging.basicConfig(filename=smk.log[0], level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s",
+                    force=True)   # Snakemake may have configured the root logger already
+
+
+def run_gci():
+    conv = open_run(smk.input.conv)
+    measure, dim = gci.mesh_measure(smk.input.mesh) if "mesh" in smk.input.keys() else (None, 3)
+    ds = gci.gci_dataset(conv, points_z=[float(z) for z in smk.params.points_z],
+                         safety_factor=float(smk.params.safety_factor), measure=measure, dim=dim, cfg=smk.config)
+    write_dataset(ds, smk.output[0])
+    logging.info("levels fine/medium/coarse = %s, r21 = %.4g, r32 = %.4g", ds.attrs["gci_levels"],
+                 float(ds["r21"]), float(ds["r32"]))
+    for i, q in enumerate(ds["quantity"].values):
+        d = ds.isel(quantity=i)
+        logging.info("%s: p = %.4g, phi_ext = %.6g %s, GCI_fine21 = %.4g %%, %s %s", q, d["apparent_order"],
+                     d["extrapolated_value"], d["quantity_units"].item(), 100 * float(d["gci_fine21"]),
+                     d["diagnosis"].item(), d["note"].item())
+
+
+def run_table():
+    ds = open_run(smk.input.gci)
+    gci.write_gci_table(ds, smk.output.csv, smk.output.md)
+
+
+try:
+    {"gci": run_gci, "table_gci": run_table}[smk.rule]()
+except Exception:
+    logging.exception("%s failed", smk.rule)
+    raise
+logging.info("%s -> %s", smk.rule, list(smk.output))
