@@ -30,6 +30,8 @@ include: "workflow/rules/solve.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/calibration.smk"
+include: "workflow/rules/ladder.smk"
+include: "workflow/rules/stability.smk"
 
 
 rule all:

@@ -37,7 +37,7 @@ from ureterfsi.config import deep_merge, load_config
 REPO = Path(__file__).resolve().parent.parent
 CONFIGS = [REPO / "config" / "config.yaml", REPO / "tests" / "data" / "mini-ureter.yaml",
            REPO / "tests" / "data" / "e2e.yaml"]
-REPLACED = (("models",), ("mesh", "levels"))      # e2e.yaml mappings that replace instead of merge
+REPLACED = (("models",), ("mesh", "levels"), ("ladder", "rungs"))      # e2e.yaml mappings that replace instead of merge
 PROFILE = REPO / "workflow" / "profiles" / "default"
 SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm"
 # as root, Open MPI refuses to start without these; more ranks than cores on a 2-core machine
@@ -115,14 +115,19 @@ def e2e(tmp_path_factory):
     wall = time.perf_counter() - t0
     log = ok(run)
     print(f"\ne2e workflow run: {wall:.1f} s")
-    sym, level = cfg["mesh"]["symmetry"], cfg["study"]["level"]
+    level = cfg["study"]["level"]
     models = sorted(cfg["models"], key=int)
     stented = [m for m in models if cfg["models"][m]["stent"]]
-    run_file = lambda m: work / f"results/runs/{sym}/model{m}_{level}.nc"   # noqa: E731
+    runs = cfg["study"]["runs"]
+    sym = {m: runs.get(m, {}).get("symmetry", cfg["mesh"]["symmetry"]) for m in models}
+    fid = {m: runs.get(m, {}).get("fidelity", cfg["study"]["fidelity"]) for m in models}
+    stem = {m: f"{fid[m]}/{sym[m]}/model{m}_{level}" for m in models}      # run, log, checkpoint paths
+    run_file = lambda m: work / f"results/runs/{stem[m]}.nc"   # noqa: E731
     # the uninterrupted 1-process run of the stented model, kept aside: the solve-again tests replace it
     reference = tmp_path_factory.mktemp("e2e-reference") / "serial.nc"
     shutil.copy2(run_file(stented[0]), reference)
     return SimpleNamespace(dir=work, cfg=cfg, cfg_path=cfg_path, log=log, wall=wall, symmetry=sym, level=level,
+                           stem=stem,
                            models=models, stented=stented, run_file=run_file, reference=reference)
 
 
@@ -142,7 +147,7 @@ def test_run_datasets(e2e):
         with xr.open_dataset(e2e.run_file(m)) as ds:
             ds.load()
         stented = cfg["models"][m]["stent"]
-        assert ds.attrs["model"] == m and ds.attrs["mesh_level"] == e2e.level and ds.attrs["symmetry"] == e2e.symmetry
+        assert ds.attrs["model"] == m and ds.attrs["mesh_level"] == e2e.level and ds.attrs["symmetry"] == e2e.symmetry[m]
         assert ds.attrs["Conventions"] == "CF-1.8"
         np.testing.assert_allclose(ds["time"], [0.0, 0.02, 0.04], atol=1e-12)
         np.testing.assert_allclose(ds["probe_time"], cfg["time"]["probe_times"], atol=1e-12)
@@ -190,13 +195,13 @@ def test_figures_and_table(e2e):
 def test_logs_and_benchmarks(e2e):
     for rule in HEAVY_RULES:
         for m in e2e.models:
-            stem = f"{e2e.symmetry}/model{m}_{e2e.level}"
+            stem = e2e.stem[m] if rule == "solve" else f"{e2e.symmetry[m]}/model{m}_{e2e.level}"
             log = e2e.dir / f"results/logs/{rule}/{stem}.log"
             bench = e2e.dir / f"results/benchmarks/{rule}/{stem}.tsv"
             assert log.stat().st_size > 0, log
             header = bench.read_text().splitlines()[0].split("\t")
             assert header[:2] == ["s", "h:m:s"] and "max_rss" in header, bench
-    solve_log = (e2e.dir / f"results/logs/solve/{e2e.symmetry}/model2_{e2e.level}.log").read_text()
+    solve_log = (e2e.dir / f"results/logs/solve/{e2e.stem['2']}.log").read_text()
     assert "done in" in solve_log and "checkpoint: step 1" in solve_log
     for stem in FIGURES + ["table1"]:
         assert (e2e.dir / f"results/logs/figures/{stem}.log").exists(), stem
@@ -274,7 +279,7 @@ def test_slurm_profile_plans_the_jobs(e2e, tmp_path):
 
 
 def _solve_again(e2e, model, *args, **popen):
-    target = f"results/runs/{e2e.symmetry}/model{model}_{e2e.level}.nc"
+    target = f"results/runs/{e2e.stem[model]}.nc"
     # the target first: --forcerun and --set-resources take several values and would swallow it
     return snakemake(e2e.dir, e2e.cfg_path, target, "--cores", "2", "--forcerun", "solve", *args, **popen)
 
@@ -284,7 +289,7 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
     reference = xr.load_dataset(e2e.reference)     # the uninterrupted run of the module fixture
-    ckpt_dir = e2e.dir / f"results/checkpoints/{e2e.symmetry}"
+    ckpt_dir = (e2e.dir / f"results/checkpoints/{e2e.stem[m]}").parent
     proc = _solve_again(e2e, m, start_new_session=True)
     t0 = time.perf_counter()
     try:
@@ -296,14 +301,14 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
         os.killpg(proc.pid, signal.SIGKILL)        # snakemake, the job shell and the solver
         proc.wait()
     assert not run_file.exists()
-    log_path = e2e.dir / f"results/logs/solve/{e2e.symmetry}/model{m}_{e2e.level}.log"
+    log_path = e2e.dir / f"results/logs/solve/{e2e.stem[m]}.log"
     first_log = log_path.read_text()
     assert "checkpoint: step 1" in first_log and "done in" not in first_log
 
     # a SIGKILLed Snakemake leaves its lock behind (and the output marked incomplete): unlock, then run again
     ok(snakemake(e2e.dir, e2e.cfg_path, "--unlock"))
     ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "--rerun-incomplete",
-                 f"results/runs/{e2e.symmetry}/model{m}_{e2e.level}.nc"))
+                 f"results/runs/{e2e.stem[m]}.nc"))
     log = log_path.read_text()
     assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
     assert "initial state" not in log          # no fresh start

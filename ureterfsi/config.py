@@ -372,6 +372,37 @@ def check_study(cfg):
                                                     f"{_fmt(cfg['time']['probe_times'])}, got {_fmt(st['convergence_time'])}")
 
 
+def check_runs(cfg):
+    for model, over in cfg["study"]["runs"].items():
+        key = f"study.runs.{model}"
+        if model not in cfg["models"]:
+            raise ConfigError(key, f"must be a key of models {sorted(cfg['models'])}")
+        if over.get("symmetry") == "axisymmetric" and cfg["models"][model]["stent"]:
+            raise ConfigError(f"{key}.symmetry", "'axisymmetric' is only valid for a model without stent "
+                                                 "(side holes break rotational symmetry)")
+
+
+def check_ladder(cfg):
+    lad = cfg.get("ladder")
+    if lad is None:
+        return
+    if lad["model"] not in cfg["models"]:
+        raise ConfigError("ladder.model", f"must be one of models {sorted(cfg['models'])}, got {_fmt(lad['model'])}")
+    if lad["reference"] not in lad["rungs"]:
+        raise ConfigError("ladder.reference", f"must be one of ladder.rungs {sorted(lad['rungs'])}, "
+                                              f"got {_fmt(lad['reference'])}")
+    for name, rung in lad["rungs"].items():
+        if rung["level"] not in cfg["mesh"]["levels"]:
+            raise ConfigError(f"ladder.rungs.{name}.level", f"must be one of mesh.levels "
+                                                            f"{sorted(cfg['mesh']['levels'])}, got {_fmt(rung['level'])}")
+        if rung["symmetry"] == "axisymmetric" and cfg["models"][lad["model"]]["stent"]:
+            raise ConfigError(f"ladder.rungs.{name}.symmetry", f"'axisymmetric' needs a model without stent; "
+                                                               f"ladder.model {lad['model']} has one")
+        if rung["dt"] > lad["end"]:
+            raise ConfigError(f"ladder.rungs.{name}.dt", f"must be <= ladder.end = {_fmt(lad['end'])} s, "
+                                                         f"got {_fmt(rung['dt'])}")
+
+
 def check_figures(cfg):
     f, probes = cfg["figures"], cfg["time"]["probe_times"]
     for key in ("wave_times", "hole_velocity_times"):
@@ -387,7 +418,8 @@ def check_figures(cfg):
 CHECKS = (
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
-    check_symmetry, check_peristalsis, check_ureter_material, check_study, check_figures,
+    check_symmetry, check_peristalsis, check_ureter_material, check_study, check_runs, check_ladder,
+    check_figures,
 )
 
 

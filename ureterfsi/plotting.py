@@ -407,3 +407,151 @@ def save_figure(fig, paths, dpi: float = 150) -> None:
 
 def figure_paths(stem, formats) -> list[str]:
     return [f"{stem}.{ext}" for ext in formats]
+
+
+# ------------------------------------------------------------------------------------ stability map
+# marker of each outcome / limit of ureterfsi.stability
+STABILITY_MARKERS = {"stable": ("o", "stable"), "ale_inversion": ("^", "failed: ALE inversion"),
+                     "newton": ("s", "failed: Newton (after halvings)"), "nan": ("X", "failed: NaN"),
+                     "energy": ("D", "failed: energy bound"), "volume": ("v", "failed: volume balance"),
+                     "wall_time": ("P", "failed: wall-time budget"), "exception": ("*", "failed: error")}
+STABILITY_SHORT = {"ale_inversion": "ALE", "newton": "Newton", "nan": "NaN", "energy": "energy",
+                   "volume": "volume", "wall_time": "budget", "exception": "error"}
+# display scale of each axis's parameter: (factor, unit label)
+STABILITY_UNITS = {"time_step": (1.0, "s"), "mesh_level": (1.0, "cells"), "bulk_ratio": (1.0, ""),
+                   "density_ratio": (1.0, ""), "load_amplitude": (KPA, "kPa"), "wave_speed": (MM_S, "mm/s"),
+                   "wave_width": (MM, "mm"), "viscosity": (1e3, "mPa s")}
+
+
+def stability_map(ds: xr.Dataset):
+    """Stability matrix (ureterfsi.stability.combine): one panel row per varied quantity.
+
+    Left: volume balance error vs the parameter (log x where the values span decades), marker = outcome
+    (failed cases by the limit they hit, labelled with it and the time), colour = minimum ALE Jacobian,
+    ring = baseline, dashed line = stability.volume_tolerance. Right: kinetic energy vs time of the same
+    cases (colour = parameter, black = baseline; a cross where a failed case stopped)."""
+    from .stability import AXES, AXIS_PARAMETER
+
+    axes_present = [a for a in AXES if a in set(str(x) for x in ds["axis"].values)]
+    n = max(len(axes_present), 1)
+    fig, axs = plt.subplots(n, 2, figsize=(10.0, 1.95 * n + 0.9), squeeze=False,
+                            gridspec_kw={"width_ratios": [1.15, 1.0]})
+    jnorm = matplotlib.colors.Normalize(0.0, 1.0)
+    jcmap = plt.get_cmap("RdYlGn")
+    tol = float(ds.attrs.get("volume_tolerance", np.nan) or np.nan)
+    axis_of = np.array([str(a) for a in ds["axis"].values])
+    base = np.flatnonzero(axis_of == "baseline")
+    for row, name in enumerate(axes_present):
+        left, right = axs[row]
+        idx = np.concatenate([base, np.flatnonzero(axis_of == name)]).astype(int)
+        factor, unit = STABILITY_UNITS.get(name, (1.0, AXES[name][0]))
+        x = ds[AXIS_PARAMETER[name]].values[idx].astype(float) * factor
+        order = np.argsort(x, kind="stable")
+        idx, x = idx[order], x[order]
+        verr = ds["volume_error"].values[idx].astype(float)
+        jmin = ds["min_jacobian"].values[idx].astype(float)
+        floor = 1e-7
+        y = np.where(np.isfinite(verr), np.maximum(verr, floor), floor)
+        left.plot(x, y, color="0.6", lw=0.8, zorder=1)
+        for k, i in enumerate(idx):
+            outcome, limit = str(ds["outcome"].values[i]), str(ds["limit"].values[i])
+            key = "stable" if outcome == "stable" else limit
+            marker = STABILITY_MARKERS.get(key, ("*", key))[0]
+            left.scatter([x[k]], [y[k]], marker=marker, s=55, c=[jcmap(jnorm(np.clip(jmin[k], 0, 1)))],
+                         edgecolors="k", linewidths=0.7, zorder=3)
+            if i in base:
+                left.scatter([x[k]], [y[k]], marker="o", s=170, facecolors="none", edgecolors="k",
+                             linewidths=0.9, zorder=2)
+            label = None
+            if name == "mesh_level":
+                label = str(ds["mesh_level"].values[i])
+            if outcome != "stable":
+                ft = float(ds["failure_time"].values[i])
+                what = STABILITY_SHORT.get(limit, limit)
+                when = f" t={ft:.2g} s" if np.isfinite(ft) else ""
+                label = f"{label + ': ' if label else ''}{what}{when}"
+            if label:
+                left.annotate(label, (x[k], y[k]), textcoords="offset points", xytext=(4, 6), fontsize=7,
+                              color="k" if outcome == "stable" else "crimson")
+        if np.isfinite(tol):
+            left.axhline(tol, color="crimson", lw=0.8, ls="--", zorder=0)
+        left.set_yscale("log")
+        positive = x[x > 0]
+        if AXES[name][2] == "log" and positive.size and positive.max() / positive.min() > 3.0:
+            left.set_xscale("log")
+        pad = 0.08 * (x.max() - x.min() if x.size and x.max() > x.min() else 1.0)
+        if left.get_xscale() == "linear":
+            left.set_xlim(x.min() - pad, x.max() + pad)
+        left.set_xlabel(f"{AXES[name][1]}" + (f" ({unit})" if unit else ""))
+        left.set_ylabel("volume balance\nerror (rel.)")
+        # right: kinetic energy histories
+        pnorm = (matplotlib.colors.LogNorm(positive.min(), positive.max()) if left.get_xscale() == "log"
+                 and positive.size else matplotlib.colors.Normalize(x.min(), x.max() if x.max() > x.min() else x.min() + 1))
+        pcmap = plt.get_cmap("viridis")
+        for k, i in enumerate(idx):
+            t = ds["time"].values[i].astype(float)
+            e = ds["kinetic_energy"].values[i].astype(float)
+            ok = np.isfinite(t) & np.isfinite(e) & (e > 0)
+            if not ok.any():
+                continue
+            colour = "k" if i in base else pcmap(pnorm(x[k])) if x[k] > 0 or left.get_xscale() == "linear" else "0.5"
+            right.plot(t[ok], e[ok], color=colour, lw=1.4 if i in base else 1.0,
+                       label=f"{ds['value_label'].values[i] or 'baseline'}")
+            if str(ds["outcome"].values[i]) != "stable" and str(ds["limit"].values[i]) != "volume":
+                right.plot(t[ok][-1], e[ok][-1], marker="x", color="crimson", ms=6, mew=1.5)
+        right.set_yscale("log")
+        e_all = ds["kinetic_energy"].values[idx].astype(float).ravel()
+        e_all = e_all[np.isfinite(e_all) & (e_all > 0)]
+        if e_all.size:   # the fluid starts at rest (E = 0 up to round-off): show four decades below the peak
+            right.set_ylim(e_all.max() * 1e-4, e_all.max() * 3.0)
+        right.set_xlabel("time (s)")
+        right.set_ylabel("kinetic\nenergy (J)")
+        right.legend(fontsize=6, ncols=2, loc="lower right", title=name.replace("_", " "), title_fontsize=6)
+    handles = [plt.Line2D([], [], ls="none", marker=m, markerfacecolor="0.85", markeredgecolor="k", label=lab)
+               for key, (m, lab) in STABILITY_MARKERS.items()
+               if key == "stable" or key in set(str(v) for v in ds["limit"].values)]
+    handles.append(plt.Line2D([], [], ls="none", marker="o", ms=11, markerfacecolor="none", markeredgecolor="k",
+                              label="baseline"))
+    handles.append(plt.Line2D([], [], color="crimson", ls="--", lw=0.8, label="volume tolerance"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5))
+    fig.colorbar(matplotlib.cm.ScalarMappable(norm=jnorm, cmap=jcmap), ax=list(axs[:, 0]), location="left",
+                 label="minimum ALE Jacobian (over the run)", shrink=0.6, pad=0.02)
+    stable = int(np.sum(ds["outcome"].values.astype(str) == "stable"))
+    fig.suptitle(f"Stability matrix, stent-free model in r-z: {stable} of {ds.sizes['case']} cases stable "
+                 f"(one-at-a-time variations around the baseline)")
+    return fig
+
+
+# ------------------------------------------------------------------------------------ fidelity ladder
+def ladder_pareto(ds: xr.Dataset):
+    """Speed-accuracy trade of the fidelity ladder: wall time of each rung against its error for every
+    quantity (ureterfsi.ladder); the reference rung (error 0) is drawn on the lower axis limit."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    errors = ds["error"].values
+    positive = errors[np.isfinite(errors) & (errors > 0)]
+    floor = 10 ** np.floor(np.log10(positive.min())) / 3 if positive.size else 1e-6
+    markers = "osD^vP*Xh<>"
+    for k, q in enumerate(ds["quantity"].values):
+        e = ds["error"].sel(quantity=q).values
+        ax.scatter(ds["wall_time"].values, np.where(e > 0, e, floor), marker=markers[k % len(markers)],
+                   s=40, alpha=0.8, label=str(q).replace("_", " "))
+    for r in ds["rung"].values:
+        row = ds.sel(rung=r)
+        e = row["error"].values
+        top = np.nanmax(e) if np.isfinite(e).any() and np.nanmax(e) > 0 else floor
+        ax.annotate(str(r), (float(row["wall_time"]), top), textcoords="offset points", xytext=(4, 6), fontsize=8)
+    if "tolerance" in ds:
+        for tol in sorted(set(float(t) for t in ds["tolerance"].values)):
+            ax.axhline(tol, color="0.4", ls=":", lw=1)
+            ax.annotate(f"tolerance {tol:g}", (ax.get_xlim()[0], tol), xytext=(2, 2), textcoords="offset points",
+                        fontsize=8, color="0.3")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time of the run (s)")
+    ax.set_ylabel(f"relative error vs '{ds.attrs.get('reference', 'reference')}' (-)")
+    ax.set_title(f"Fidelity ladder, model {ds.attrs.get('model', '?')}, first {ds.attrs.get('window_s', '?')} s "
+                 f"(reference on the lower edge)", fontsize=10)
+    ax.legend(fontsize=7, ncol=2, loc="upper right")
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig

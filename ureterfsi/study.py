@@ -294,8 +294,12 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
              "step_wall_time": [r.wall_time for r in records]}
     for name, values in steps.items():
         ds[name] = _cf(xr.DataArray(np.asarray(values), dims="step"), name)
+    import resource
+
+    # peak resident memory of this process (Linux reports KiB), rank 0 under MPI
+    peak = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     ds.attrs.update(provenance_attrs(cfg, model=spec.model, mesh_level=spec.level, symmetry=spec.symmetry,
-                                     fidelity=fidelity, **extra_attrs))
+                                     fidelity=fidelity, peak_memory_mib=peak, **extra_attrs))
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi probes, model {spec.model}, mesh {spec.level} ({spec.symmetry})"
     return ds

@@ -7,13 +7,14 @@ CONVERGENCE_MODEL = str(config["study"]["convergence_model"])
 
 
 def run_file(model, level):
-    """Per-run probe dataset of one stent model on one mesh level (written by the solve rule)."""
-    return f"results/runs/{SYMMETRY}/model{model}_{level}.nc"
+    """Per-run probe dataset of one stent model on one mesh level (written by the solve rule), at the
+    model's fidelity rung and mesh symmetry (study.fidelity, mesh.symmetry, study.runs)."""
+    return f"results/runs/{run_fidelity(model)}/{run_symmetry(model)}/model{model}_{level}.nc"
 
 
 def mesh_sidecar(model, level):
-    """JSON sidecar of the mesh of one stent model on one mesh level."""
-    return f"results/meshes/{SYMMETRY}/model{model}_{level}.json"
+    """JSON sidecar of the mesh of one stent model on one mesh level (the mesh its study runs use)."""
+    return f"results/meshes/{run_symmetry(model)}/model{model}_{level}.json"
 
 
 rule aggregate_models:

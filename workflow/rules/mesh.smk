@@ -27,4 +27,6 @@ rule all_meshes:
                    symmetry=SYMMETRY, model=MODELS, level=LEVELS, ext=("msh", "json"))
             + expand("results/meshes/axisymmetric/model{model}_{level}.{ext}",
                      model=AXISYMMETRIC_MODELS, level=LEVELS, ext=("msh", "json"))
+            + [f"results/meshes/{run_symmetry(m)}/model{m}_{lv}.{ext}"
+               for m in MODELS for lv in LEVELS for ext in ("msh", "json")]
         )),

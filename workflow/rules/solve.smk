@@ -1,9 +1,26 @@
-# Fully coupled FSI solves (paper §2.2-2.4): one run per model and mesh level.
+# FSI solves (paper §2.2-2.4): one run per model, mesh level and fidelity rung (fully_coupled: the
+# monolithic ALE model; one_way: wall -> urine -> stent, serial).
 # A run is an MPI job: resources.tasks processes under resources.mpi (mpiexec locally, srun on SLURM).
 # A killed run resumes from its checkpoint when Snakemake starts it again (checkpoints are kept outside
 # the job's outputs, so Snakemake's clean-up of incomplete outputs does not remove them).
 import json
 import sys
+import tempfile
+from types import SimpleNamespace
+
+
+def solve_command(config, *, model, level, symmetry, fidelity, mesh, out, log, threads, extra="", tasks=1,
+                  mpi="mpiexec"):
+    """Run `python -m ureterfsi.study` on the whole configuration (handed over as a temporary JSON file);
+    fully coupled runs with tasks > 1 go through the MPI launcher, the one-way rung is serial."""
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
+        json.dump(config, fh)
+    launcher = f"{mpi} -n {tasks} " if tasks > 1 and fidelity == "fully_coupled" else ""
+    shell(
+        f"trap 'rm -f {fh.name}' EXIT; OPENBLAS_NUM_THREADS={threads} {launcher}{sys.executable} -m ureterfsi.study"
+        f" --config-json {fh.name} --model {model} --level {level} --symmetry {symmetry} --mesh {mesh}"
+        f" --out {out} --fidelity {fidelity} {extra} > {log} 2>&1"
+    )
 
 
 def study_subset(w):
@@ -16,14 +33,14 @@ rule solve:
     input:
         mesh="results/meshes/{symmetry}/model{model}_{level}.msh",
     output:
-        "results/runs/{symmetry}/model{model}_{level}.nc",
+        "results/runs/{fidelity}/{symmetry}/model{model}_{level}.nc",
     params:
         study=study_subset,
-        checkpoint="results/checkpoints/{symmetry}/model{model}_{level}.npz",
+        checkpoint="results/checkpoints/{fidelity}/{symmetry}/model{model}_{level}.npz",
     log:
-        "results/logs/solve/{symmetry}/model{model}_{level}.log",
+        "results/logs/solve/{fidelity}/{symmetry}/model{model}_{level}.log",
     benchmark:
-        "results/benchmarks/solve/{symmetry}/model{model}_{level}.tsv"
+        "results/benchmarks/solve/{fidelity}/{symmetry}/model{model}_{level}.tsv"
     threads: 1
     resources:
         tasks=1,
@@ -31,14 +48,6 @@ rule solve:
         mem_mb=16000,
         runtime=24 * 60,
     run:
-        import tempfile
-
-        with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
-            json.dump(config, fh)
-        launcher = f"{resources.mpi} -n {resources.tasks} " if resources.tasks > 1 else ""
-        shell(
-            "trap 'rm -f {fh.name}' EXIT; OPENBLAS_NUM_THREADS={threads} {launcher}{sys.executable} -m ureterfsi.study"
-            " --config-json {fh.name} --model {wildcards.model} --level {wildcards.level}"
-            " --symmetry {wildcards.symmetry} --mesh {input.mesh} --out {output}"
-            " --checkpoint {params.checkpoint} > {log} 2>&1"
-        )
+        solve_command(config, model=wildcards.model, level=wildcards.level, symmetry=wildcards.symmetry,
+                      fidelity=wildcards.fidelity, mesh=input.mesh, out=output[0], log=log[0], threads=threads,
+                      extra=f"--checkpoint {params.checkpoint}", tasks=resources.tasks, mpi=resources.mpi)

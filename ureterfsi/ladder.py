@@ -1,0 +1,152 @@
+"""Fidelity ladder: what each cheaper model costs and what it loses against the reference (issue 5).
+
+Each rung is a run of the same stent model (config `ladder`): a fidelity (fully coupled / one-way), a
+mesh symmetry, a mesh level and a time step. For every quantity behind a figure the error of a rung is
+the relative max-norm error against the reference rung,
+
+    e = max |q_rung - q_ref| / max |q_ref|,
+
+over time (series, the rung interpolated linearly onto the reference times), over the probe line /
+hole section at every common probe time (snapshots), and over the side holes the two runs share
+(a half model holds both holes of a pair, a quarter model one). Each scene (figure, config `scenes`)
+declares its quantities and a tolerance; the scene's rung is the cheapest (wall time) whose largest
+error over those quantities is within it.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .provenance import provenance_attrs
+
+SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "stent_max_von_mises",
+          "max_wall_displacement", "hole_flux")
+SNAPSHOTS = ("stent_von_mises_line", "wall_radial_displacement", "hole_velocity_y")
+QUANTITIES = SERIES + SNAPSHOTS
+
+
+def _common_holes(ref: xr.Dataset, run: xr.Dataset):
+    """Indices (ref, run) of the side holes present in both runs, matched by (z, side)."""
+    key = lambda ds: [(round(float(z), 9), float(s)) for z, s in zip(ds["hole_z"].values, ds["hole_side"].values)]  # noqa: E731
+    kr, kn = key(ref), key(run)
+    pairs = [(i, kn.index(k)) for i, k in enumerate(kr) if k in kn]
+    return [i for i, _ in pairs], [j for _, j in pairs]
+
+
+def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
+    """Relative max-norm error of quantity `name` of `run` against `ref` (NaN if either lacks it)."""
+    if name not in ref or name not in run:
+        return float("nan")
+    if name in SNAPSHOTS:
+        times = [t for t in ref["probe_time"].values
+                 if np.any(np.isclose(run["probe_time"].values, t, atol=1e-9))]
+        if not times:
+            return float("nan")
+        a = np.stack([ref[name].sel(probe_time=t, method="nearest").values for t in times])
+        b = np.stack([run[name].sel(probe_time=t, method="nearest").values for t in times])
+    else:
+        t_ref, t_run = ref["time"].values, run["time"].values
+        keep = t_ref <= t_run[-1] + 1e-9
+        a = ref[name].values[keep]
+        b = run[name].values
+        if name == "hole_flux":
+            i, j = _common_holes(ref, run)
+            a, b = a[:, i], b[:, j]
+            b = np.stack([np.interp(t_ref[keep], t_run, b[:, k]) for k in range(b.shape[1])], axis=1)
+        else:
+            b = np.interp(t_ref[keep], t_run, b)
+    scale = np.nanmax(np.abs(a))
+    return float(np.nanmax(np.abs(b - a)) / scale) if scale > 0 else float(np.nanmax(np.abs(b - a)))
+
+
+def select_rungs(error: xr.DataArray, cost: xr.DataArray, scenes: dict) -> dict:
+    """{scene: (rung, error)}: the cheapest rung whose largest error over the scene's quantities is within
+    its tolerance (the reference, error 0, always qualifies)."""
+    out = {}
+    order = [str(r) for r in cost.sortby(cost).rung.values]
+    for scene, spec in scenes.items():
+        qs = [q for q in spec["quantities"] if q in error["quantity"].values]
+        worst = error.sel(quantity=qs).max("quantity", skipna=True) if qs else None
+        choice = None
+        for rung in order:
+            e = float(worst.sel(rung=rung)) if worst is not None else float("nan")
+            if np.isfinite(e) and e <= spec["tolerance"]:
+                choice = (rung, e)
+                break
+        out[scene] = choice or ("none", float("nan"))
+    return out
+
+
+def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
+    """Error of every rung against the reference for every quantity, with cost and the scene choices."""
+    lad = cfg["ladder"]
+    runs = {name: xr.load_dataset(p) for name, p in paths.items()}
+    ref = runs[lad["reference"]]
+    names = list(runs)
+    quantities = [q for q in QUANTITIES if q in ref]
+    error = np.array([[relative_error(ref, runs[r], q) for q in quantities] for r in names])
+    ds = xr.Dataset(
+        {"error": (("rung", "quantity"), error,
+                   {"units": "1", "long_name": f"relative max-norm error against the reference rung "
+                                               f"'{lad['reference']}'"}),
+         "wall_time": ("rung", [float(runs[r].attrs["wall_time_s"]) for r in names],
+                       {"units": "s", "long_name": "wall-clock time of the run"}),
+         "peak_memory": ("rung", [float(runs[r].attrs.get("peak_memory_mib", np.nan)) for r in names],
+                         {"units": "MiB", "long_name": "peak resident memory of the run"}),
+         "cells": ("rung", [int(runs[r].attrs["cells"]) for r in names],
+                   {"units": "1", "long_name": "cells of the mesh"}),
+         "dofs": ("rung", [int(runs[r].attrs["dofs"]) for r in names],
+                  {"units": "1", "long_name": "unknowns of the (fluid or coupled) Newton system"}),
+         "time_step": ("rung", [float(lad["rungs"][r]["dt"]) for r in names],
+                       {"units": "s", "long_name": "time step"}),
+         "fidelity": ("rung", [lad["rungs"][r]["fidelity"] for r in names],
+                      {"units": "1", "long_name": "coupling of the rung"}),
+         "symmetry": ("rung", [lad["rungs"][r]["symmetry"] for r in names],
+                      {"units": "1", "long_name": "mesh symmetry of the rung"}),
+         "level": ("rung", [lad["rungs"][r]["level"] for r in names],
+                   {"units": "1", "long_name": "mesh level of the rung"})},
+        coords={"rung": ("rung", names, {"units": "1", "long_name": "rung of the fidelity ladder"}),
+                "quantity": ("quantity", quantities, {"units": "1", "long_name": "quantity of interest"})})
+    scenes = cfg.get("scenes", {})
+    if scenes:
+        chosen = select_rungs(ds["error"], ds["wall_time"], scenes)
+        sc = list(scenes)
+        ds = ds.assign_coords(scene=("scene", sc, {"units": "1", "long_name": "figure (scene)"}))
+        ds["tolerance"] = ("scene", [float(scenes[s]["tolerance"]) for s in sc],
+                           {"units": "1", "long_name": "tolerated relative error of the scene"})
+        ds["chosen_rung"] = ("scene", [chosen[s][0] for s in sc],
+                             {"units": "1", "long_name": "cheapest rung within the scene's tolerance"})
+        ds["chosen_error"] = ("scene", [chosen[s][1] for s in sc],
+                              {"units": "1", "long_name": "largest error of the chosen rung over the scene's quantities"})
+    ds.attrs.update(provenance_attrs(cfg, model=lad["model"], reference=lad["reference"], window_s=lad["end"]))
+    for r in names:
+        ds.attrs[f"run_{r}_source"] = Path(paths[r]).name
+        for key in ("one_way_max_wall_pressure_deviation", "one_way_max_stent_displacement"):
+            if key in runs[r].attrs:
+                ds.attrs[f"run_{r}_{key}"] = float(runs[r].attrs[key])
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi fidelity ladder, model {lad['model']}, window {lad['end']:g} s"
+    return ds
+
+
+def ladder_table(ds: xr.Dataset) -> str:
+    """Markdown table: per rung the cost and the error of each quantity; then the scene choices."""
+    qs = [str(q) for q in ds["quantity"].values]
+    head = "| rung | fidelity | symmetry | level | dt (s) | cells | wall time (s) | memory (MiB) | " + \
+           " | ".join(qs) + " |"
+    lines = [head, "|" + "---|" * (8 + len(qs))]
+    for r in ds["rung"].values:
+        row = ds.sel(rung=r)
+        errs = " | ".join(f"{float(row['error'].sel(quantity=q)):.2e}" for q in qs)
+        lines.append(f"| {r} | {row['fidelity'].item()} | {row['symmetry'].item()} | {row['level'].item()} | "
+                     f"{float(row['time_step']):g} | {int(row['cells'])} | {float(row['wall_time']):.1f} | "
+                     f"{float(row['peak_memory']):.0f} | {errs} |")
+    if "scene" in ds.coords:
+        lines += ["", "| scene | tolerance | cheapest rung within it | its error |", "|---|---|---|---|"]
+        for s in ds["scene"].values:
+            row = ds.sel(scene=s)
+            lines.append(f"| {s} | {float(row['tolerance']):g} | {row['chosen_rung'].item()} | "
+                         f"{float(row['chosen_error']):.2e} |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,21 @@
+"""Snakemake script of rule `ladder` (workflow/rules/ladder.smk): rung runs -> ladder dataset, Markdown table
+and speed-accuracy figure (ureterfsi.ladder, ureterfsi.plotting.ladder_pareto), all written atomically."""
+import logging
+
+from ureterfsi.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi import ladder, plotting
+from ureterfsi.provenance import atomic_path
+
+smk = snakemake  # noqa: F821
+logging.basicConfig(filename=smk.log[0], level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s",
+                    force=True)
+try:
+    ds = ladder.ladder_dataset(dict(zip(smk.params.rungs, smk.input.runs)), smk.config)
+    write_dataset(ds, smk.output.dataset)
+    with atomic_path(smk.output.md) as tmp:
+        tmp.write_text(ladder.ladder_table(ds))
+    plotting.save_figure(plotting.ladder_pareto(ds), smk.output.figures, dpi=smk.params.figures["dpi"])
+    logging.info("\n%s", ladder.ladder_table(ds))
+except Exception:
+    logging.exception("ladder failed")
+    raise
