@@ -450,8 +450,9 @@ def stability_map(ds: xr.Dataset):
         idx, x = idx[order], x[order]
         verr = ds["volume_error"].values[idx].astype(float)
         jmin = ds["min_jacobian"].values[idx].astype(float)
-        floor = 1e-7
-        y = np.where(np.isfinite(verr), np.maximum(verr, floor), floor)
+        pos = verr[np.isfinite(verr) & (verr > 0)]
+        floor = 0.2 * pos.min() if pos.size else 1e-6   # a case without flow has no error: drawn at the floor
+        y = np.where(np.isfinite(verr) & (verr > 0), verr, floor)
         left.plot(x, y, color="0.6", lw=0.8, zorder=1)
         for k, i in enumerate(idx):
             outcome, limit = str(ds["outcome"].values[i]), str(ds["limit"].values[i])
@@ -465,23 +466,38 @@ def stability_map(ds: xr.Dataset):
             label = None
             if name == "mesh_level":
                 label = str(ds["mesh_level"].values[i])
+            if np.isfinite(verr[k]) and verr[k] == 0.0:
+                label = "error 0 (nothing moves)"
             if outcome != "stable":
                 ft = float(ds["failure_time"].values[i])
                 what = STABILITY_SHORT.get(limit, limit)
                 when = f" t={ft:.2g} s" if np.isfinite(ft) else ""
                 label = f"{label + ': ' if label else ''}{what}{when}"
             if label:
-                left.annotate(label, (x[k], y[k]), textcoords="offset points", xytext=(4, 6), fontsize=7,
+                right_half = x.size > 1 and k >= x.size / 2
+                left.annotate(label, (x[k], y[k]), textcoords="offset points", xytext=(-5 if right_half else 5, 5),
+                              ha="right" if right_half else "left", fontsize=7,
                               color="k" if outcome == "stable" else "crimson")
         if np.isfinite(tol):
             left.axhline(tol, color="crimson", lw=0.8, ls="--", zorder=0)
         left.set_yscale("log")
+        left.set_ylim(min(y.min(), tol if np.isfinite(tol) else y.min()) / 3.0,
+                      max(y.max(), tol if np.isfinite(tol) else y.max()) * 6.0)
         positive = x[x > 0]
         if AXES[name][2] == "log" and positive.size and positive.max() / positive.min() > 3.0:
             left.set_xscale("log")
-        pad = 0.08 * (x.max() - x.min() if x.size and x.max() > x.min() else 1.0)
         if left.get_xscale() == "linear":
+            pad = 0.08 * (x.max() - x.min() if x.size and x.max() > x.min() else 1.0)
             left.set_xlim(x.min() - pad, x.max() + pad)
+        else:
+            left.set_xlim(positive.min() / 1.6, positive.max() * 1.6)
+        # ticks at the values of the cases, in the display unit
+        ticks = np.unique(x)
+        left.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+        left.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        fmt = "{:.0f}" if name == "mesh_level" else "{:.3g}"
+        left.xaxis.set_major_formatter(matplotlib.ticker.FixedFormatter([fmt.format(v) for v in ticks]))
+        left.tick_params(axis="x", labelsize=7)
         left.set_xlabel(f"{AXES[name][1]}" + (f" ({unit})" if unit else ""))
         left.set_ylabel("volume balance\nerror (rel.)")
         # right: kinetic energy histories
@@ -506,7 +522,8 @@ def stability_map(ds: xr.Dataset):
             right.set_ylim(e_all.max() * 1e-4, e_all.max() * 3.0)
         right.set_xlabel("time (s)")
         right.set_ylabel("kinetic\nenergy (J)")
-        right.legend(fontsize=6, ncols=2, loc="lower right", title=name.replace("_", " "), title_fontsize=6)
+        right.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), title=name.replace("_", " "),
+                     title_fontsize=6)
     handles = [plt.Line2D([], [], ls="none", marker=m, markerfacecolor="0.85", markeredgecolor="k", label=lab)
                for key, (m, lab) in STABILITY_MARKERS.items()
                if key == "stable" or key in set(str(v) for v in ds["limit"].values)]
@@ -515,7 +532,7 @@ def stability_map(ds: xr.Dataset):
     handles.append(plt.Line2D([], [], color="crimson", ls="--", lw=0.8, label="volume tolerance"))
     fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5))
     fig.colorbar(matplotlib.cm.ScalarMappable(norm=jnorm, cmap=jcmap), ax=list(axs[:, 0]), location="left",
-                 label="minimum ALE Jacobian (over the run)", shrink=0.6, pad=0.02)
+                 label="minimum ALE Jacobian (over the run)", shrink=0.4, pad=0.02)
     stable = int(np.sum(ds["outcome"].values.astype(str) == "stable"))
     fig.suptitle(f"Stability matrix, stent-free model in r-z: {stable} of {ds.sizes['case']} cases stable "
                  f"(one-at-a-time variations around the baseline)")
