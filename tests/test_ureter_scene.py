@@ -10,20 +10,32 @@ import pytest
 from ureterfsi.config import load_config_files
 from ureterfsi.mesh import build_mesh
 from ureterfsi.scenes.ureter import pulse_sigma, peristaltic_pressure
+from ureterfsi import ladder, oneway
 from ureterfsi.study import RunSpec, run
 
 
-def _run(tmp_path, configs, model="3", level="coarse", symmetry="quarter", end=None):
+def _run(tmp_path, configs, model="3", level="coarse", symmetry="quarter", end=None, solve=run):
     cfg = load_config_files(configs)
     msh = tmp_path / f"model{model}.msh"
-    build_mesh(cfg, model, level, symmetry, msh, tmp_path / f"model{model}.json")
-    return cfg, run(cfg, RunSpec(model, level, symmetry, str(msh), end=end), str(tmp_path / "run.nc"))
+    if not msh.exists():
+        build_mesh(cfg, model, level, symmetry, msh, tmp_path / f"model{model}.json")
+    return cfg, solve(cfg, RunSpec(model, level, symmetry, str(msh), end=end), str(tmp_path / f"{solve.__module__}.nc"))
 
 
 @pytest.fixture(scope="module")
-def mini(tmp_path_factory, repo_root):
-    tmp = tmp_path_factory.mktemp("mini")
-    return _run(tmp, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+def mini_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("mini")
+
+
+@pytest.fixture(scope="module")
+def mini(mini_dir, repo_root):
+    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+
+
+@pytest.fixture(scope="module")
+def mini_one_way(mini_dir, repo_root):
+    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"],
+                solve=oneway.run)
 
 
 def test_wall_bulges_under_the_travelling_load(mini):
@@ -73,6 +85,22 @@ def test_stent_probes_and_diagnostics(mini):
         assert "units" in var.attrs and "long_name" in var.attrs, name
     for key in ("config_hash", "git_commit", "model", "mesh_level", "version_dolfinx"):
         assert key in ds.attrs
+
+
+def test_one_way_rung_follows_the_fully_coupled_model(mini, mini_one_way):
+    """Issue 5, one-way rung (r-z wall -> urine alone -> quasi-static stent) against the fully coupled
+    model on the same mesh, load and steps. Measured: <= 1.1e-2 (hole velocity), 4e-3..9e-3 (flux, wall),
+    3e-4..8e-4 (stent stress)."""
+    _, ref = mini
+    cfg, ow = mini_one_way
+    assert ow.attrs["fidelity"] == "one_way" and ref.attrs["fidelity"] == "fully_coupled"
+    errors = {q: ladder.relative_error(ref, ow, q) for q in ladder.QUANTITIES if q in ref}
+    print("one-way vs fully coupled:", {q: f"{e:.2e}" for q, e in errors.items()})
+    assert max(errors.values()) < 0.02, errors
+    assert errors["stent_max_von_mises"] < 2e-3 and errors["stent_von_mises_line"] < 2e-3
+    # what the rung leaves out is small: urine pressure on the wall vs the load, stent motion vs the holes
+    assert ow.attrs["one_way_max_wall_pressure_deviation"] < 1e-3 * cfg["peristalsis"]["peak_traction"]
+    assert 0 < ow.attrs["one_way_max_stent_displacement"] < 1e-3 * ow.attrs["one_way_hole_diameter"]
 
 
 def test_load_is_the_configured_gaussian(repo_root):

@@ -339,3 +339,27 @@ def test_solve_rule_under_mpi_matches_serial(e2e):
         rel = np.abs(a - b).max() / np.abs(b).max()
         print(f"MPI 2 vs 1 process, {name}: max relative difference {rel:.2e}")
         assert rel < 1e-8, (name, rel)
+
+
+def test_ladder_target(e2e):
+    """`snakemake ladder`: the reference and the one-way rung of the stented model through the workflow
+    (one_way: r-z wall -> urine alone -> stent), compared in the ladder dataset, table and figure."""
+    out = ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "ladder"))
+    counts = job_counts(out)
+    assert counts.get("ladder_run") == 2 and counts.get("ladder") == 1, counts
+    with xr.open_dataset(e2e.dir / "results/datasets/ladder.nc") as ds:
+        ds.load()
+    assert list(ds["rung"].values) == ["fully_coupled", "one_way"]
+    err = ds["error"].sel(rung="one_way")
+    print("one-way vs fully coupled (2 steps):", {str(q): f"{float(e):.2e}" for q, e in zip(ds["quantity"].values, err)})
+    assert float(ds["error"].sel(rung="fully_coupled").max()) == 0.0
+    # the one-way rung follows the fully coupled model closely (< 2 % on every figure quantity)
+    assert 0.0 < float(err.max()) < 0.02, err.values
+    assert set(ds["chosen_rung"].values) == {"one_way"}
+    with xr.open_dataset(e2e.dir / "results/ladder/one_way.nc") as run:
+        assert run.attrs["fidelity"] == "one_way"
+        assert run.attrs["one_way_max_wall_pressure_deviation"] < 1e-2 * run.attrs["one_way_peristaltic_peak_traction"]
+        assert run.attrs["one_way_max_stent_displacement"] < 1e-2 * run.attrs["one_way_hole_diameter"]
+    for p in ("results/figures/table_ladder.md", "results/figures/ladder_pareto.png",
+              "results/logs/ladder/one_way.log", "results/benchmarks/ladder/one_way.tsv"):
+        assert (e2e.dir / p).stat().st_size > 0, p

@@ -6,7 +6,8 @@ the relative max-norm error against the reference rung,
 
     e = max |q_rung - q_ref| / max |q_ref|,
 
-over time (series, the rung interpolated linearly onto the reference times), over the probe line /
+over time (series, the rung interpolated linearly onto the reference times of the common span), over the
+probe line /
 hole section at every common probe time (snapshots), and over the side holes the two runs share
 (a half model holds both holes of a pair, a quarter model one). Each scene (figure, config `scenes`)
 declares its quantities and a tolerance; the scene's rung is the cheapest (wall time) whose largest
@@ -48,7 +49,7 @@ def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
         b = np.stack([run[name].sel(probe_time=t, method="nearest").values for t in times])
     else:
         t_ref, t_run = ref["time"].values, run["time"].values
-        keep = t_ref <= t_run[-1] + 1e-9
+        keep = (t_ref >= t_run[0] - 1e-9) & (t_ref <= t_run[-1] + 1e-9)     # the common time span
         a = ref[name].values[keep]
         b = run[name].values
         if name == "hole_flux":

@@ -207,7 +207,6 @@ class QuasiStaticStent:
         self.von_mises = CellField(msh, von_mises(physics.elastic_first_piola(ops, material, self.u)), 1)
         self.probe = PointProbe(msh, probe_points)
         self.residual = fem_petsc.create_vector(fluid_pb.residual_form)
-        self.max_displacement = 0.0
         self.wall_time = 0.0
 
     def _match_interface(self, stent: SubDomain):
@@ -245,8 +244,6 @@ class QuasiStaticStent:
         fem_petsc.set_bc(f, self.bcs)
         self.ksp.solve(f, self.u.vector)
         self.u.x.scatter_forward()
-        self.max_displacement = max(self.max_displacement,
-                                    float(np.max(np.linalg.norm(self.u.x.array.reshape(-1, 3), axis=1))))
         self.von_mises.update()
         self.wall_time += _time.perf_counter() - t0
 
@@ -265,23 +262,19 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
 
     from mpi4py import MPI
 
-    from .fsi import TimeIntegrator, TimeSettings
     from .fsi.submesh import extract
     from .geometry import StentModel, UreterGeometry
     from .mesh import load_mesh
     from .provenance import atomic_path
     from .scenes.ureter import materials, ureter_fluid_scene
-    from .study import N_LINE, UreterProbes, probes_dataset, solver_options
+    from .study import (N_LINE, UreterProbes, integrate_from_rest, probes_dataset, solver_options,
+                        time_settings)
 
     wall0 = _time.perf_counter()
     comm = MPI.COMM_WORLD
     if comm.size > 1:
         raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
-    tcfg = cfg["time"]
-    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"],
-                            output_times=tcfg["probe_times"], max_halvings=cfg["solver"]["max_step_halvings"],
-                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
-                            checkpoint_path=checkpoint_path)
+    settings = time_settings(cfg, spec, checkpoint_path)
     history = wall_history(cfg, settings.end, settings.dt)
 
     axisymmetric = spec.symmetry == "axisymmetric"
@@ -305,14 +298,11 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
     log.info("one-way model %s, mesh %s (%s): %d cells (%d fluid), %d fluid dofs, setup %.1f s", spec.model,
              spec.level, spec.symmetry, ncells, fluid.mesh.topology.index_map(fluid.mesh.topology.dim).size_global,
              ndofs, _time.perf_counter() - wall0)
-    obs = UreterProbes(pb, cfg, model, spec.symmetry, tcfg["probe_times"], wall=RecordedWall(history, z), stent=stent)
-    guard = WallPressure(pb, cfg["fluid"]["reference_pressure"])
-    integrator = TimeIntegrator(pb, settings, [obs, guard])
-    if not integrator.has_checkpoint():
-        its, hist = pb.solve_steady()
-        log.info("initial state: urine at rest at the reference pressure, %d Newton iterations, residual %.2e",
-                 its, hist[-1])
-    records = integrator.run()
+    obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
+                       stent=stent)
+    diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)
+    integrator = integrate_from_rest(pb, settings, [obs, diag])
+    records = integrator.records
     wall = _time.perf_counter() - wall0
     extra = {
         "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
@@ -322,40 +312,46 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
                    f"quasi-static linear stent (LU once)"),
         "timings": {k: round(v, 2) for k, v in pb.timings.items()},
         "wall_solve_time_s": round(history.wall_time, 2),
-        "one_way_max_wall_pressure_deviation": guard.max_deviation,
+        "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
         "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
     }
     if stent is not None:
-        extra.update(one_way_max_stent_displacement=stent.max_displacement,
+        extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,
                      one_way_hole_diameter=g.hole_radius * 2, stent_solve_time_s=round(stent.wall_time, 2))
     ds = probes_dataset(obs, records, cfg, spec, extra, fidelity="one_way")
     with atomic_path(out_path) as tmp:
         ds.to_netcdf(tmp)
     integrator.remove_checkpoint()
     log.info("done in %.1f s -> %s (max |p - p_ref| on the wall %.1f Pa vs load %.0f Pa%s)", wall, out_path,
-             guard.max_deviation, cfg["peristalsis"]["peak_traction"],
-             f"; max stent displacement {stent.max_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
+             diag.max_wall_pressure_deviation, cfg["peristalsis"]["peak_traction"],
+             f"; max stent displacement {diag.max_stent_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
              if stent is not None else "")
     return ds
 
 
-class WallPressure(Observer):
-    """Largest |p - p_ref| of the urine on the ureter wall: the load the one-way rung leaves out."""
+class OneWayDiagnostics(Observer):
+    """What the one-way rung leaves out, measured as it runs: the largest |p - p_ref| of the urine on the
+    ureter wall (a load the wall solve does not see) and the largest stent displacement (a motion the
+    urine does not see). Registered after UreterProbes, which updates the stent."""
 
-    def __init__(self, pb: MonolithicFSI, reference_pressure: float):
-        P, self.pmap = pb.sub("pressure").collapse()
+    def __init__(self, pb: MonolithicFSI, reference_pressure: float, stent: QuasiStaticStent | None):
+        P, pmap = pb.sub("pressure").collapse()
         fdim = pb.mesh.topology.dim - 1
-        self.dofs = np.asarray(self.pmap)[fem.locate_dofs_topological(
+        self.dofs = np.asarray(pmap)[fem.locate_dofs_topological(
             P, fdim, pb.scene.facet_tags.find(tags.FLUID_URETER))]
-        self.pb, self.p_ref, self.max_deviation = pb, reference_pressure, 0.0
+        self.pb, self.p_ref, self.stent = pb, reference_pressure, stent
+        self.max_wall_pressure_deviation, self.max_stent_displacement = 0.0, 0.0
 
     def observe(self, problem, step):
         if self.dofs.size:
             dev = float(np.max(np.abs(self.pb.x.x.array[self.dofs] - self.p_ref)))
-            self.max_deviation = max(self.max_deviation, dev)
+            self.max_wall_pressure_deviation = max(self.max_wall_pressure_deviation, dev)
+        if self.stent is not None:
+            u = self.stent.u.x.array.reshape(-1, 3)
+            self.max_stent_displacement = max(self.max_stent_displacement, float(np.linalg.norm(u, axis=1).max()))
 
     def state(self):
-        return {"max_deviation": self.max_deviation}
+        return {"p": self.max_wall_pressure_deviation, "u": self.max_stent_displacement}
 
     def load_state(self, state):
-        self.max_deviation = state["max_deviation"]
+        self.max_wall_pressure_deviation, self.max_stent_displacement = state["p"], state["u"]

@@ -305,6 +305,28 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     return ds
 
 
+def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None) -> TimeSettings:
+    """Time stepping of a run: config `time` with the run's end/dt overrides, checkpoints if a path is given."""
+    tcfg = cfg["time"]
+    return TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"], output_times=tcfg["probe_times"],
+                        max_halvings=cfg["solver"]["max_step_halvings"],
+                        checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
+                        checkpoint_path=checkpoint_path)
+
+
+def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers) -> TimeIntegrator:
+    """Urine at rest at the reference pressure (steady solve, paper §2.4), then time steps to the end;
+    a run with a checkpoint resumes from it instead. The integrator holds the step records; remove its
+    checkpoint once the run's output is written."""
+    integrator = TimeIntegrator(pb, settings, observers)
+    if not integrator.has_checkpoint():
+        its, hist = pb.solve_steady()
+        log.info("initial state: urine at rest at the reference pressure, %d Newton iterations, residual %.2e",
+                 its, hist[-1])
+    integrator.run()
+    return integrator
+
+
 def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = None) -> xr.Dataset:
     """Fully coupled solve of one model on one mesh; writes the probe dataset atomically."""
     from mpi4py import MPI as _MPI
@@ -320,18 +342,10 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
     ncells = mesh.topology.index_map(mesh.topology.dim).size_global
     log.info("model %s, mesh %s (%s): %d cells, %d dofs, %d processes, setup %.1f s", spec.model, spec.level,
              spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
-    tcfg = cfg["time"]
-    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"],
-                            output_times=tcfg["probe_times"], max_halvings=cfg["solver"]["max_step_halvings"],
-                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
-                            checkpoint_path=checkpoint_path)
-    obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, tcfg["probe_times"])
-    integrator = TimeIntegrator(pb, settings, [obs])
-    if not integrator.has_checkpoint():
-        its, hist = pb.solve_steady()
-        log.info("initial state: fluid at rest at the reference pressure, %d Newton iterations, residual %.2e",
-                 its, hist[-1])
-    records = integrator.run()
+    settings = time_settings(cfg, spec, checkpoint_path)
+    obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
+    integrator = integrate_from_rest(pb, settings, [obs])
+    records = integrator.records
     wall = _time.perf_counter() - wall0
     ds = probes_dataset(obs, records, cfg, spec, {
         "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),

@@ -395,7 +395,17 @@ class MonolithicFSI:
             Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
             A.axpy(1.0, Am, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._jacobian_valid = True
+        self._jacobian_rate = self._rate()
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
+
+    def _rate(self) -> float:
+        """b0/dt, the only time-integration coefficient in the Jacobian (0 in steady solves)."""
+        return float(self.bdf[0].value) / float(self.dt.value)
+
+    def _jacobian_current(self) -> bool:
+        """A kept factorisation is only reusable for the same b0/dt: a steady-state Jacobian (no inertia)
+        or one of another step size or BDF order would be reused for a different operator."""
+        return self._jacobian_valid and math.isclose(self._jacobian_rate, self._rate(), rel_tol=1e-12)
 
     def invalidate_jacobian(self):
         """Force a fresh Jacobian and factorisation at the next Newton iteration."""
@@ -428,7 +438,7 @@ class MonolithicFSI:
             if it == o.newton_max_iterations:
                 break
             contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            fresh = not (o.reuse_jacobian and self._jacobian_valid
+            fresh = not (o.reuse_jacobian and self._jacobian_current()
                          and (contraction < o.reuse_contraction
                               or self._reuse_reaches_tolerance(contraction, r, r0)))
             if fresh:

@@ -1,0 +1,98 @@
+"""Fidelity ladder (issue 5): errors of a rung against the reference, scene choices, dataset, table, figure.
+
+Runs are built by the study's own probes_dataset from analytic values (tests/test_aggregate_figures.py):
+a rung that equals the reference has error 0; a rung scaled by (1 + eps) has error eps for every quantity;
+a coarser time grid of the same smooth curves has the interpolation error only; a half model's two holes
+per pair are matched to the quarter model's one.
+"""
+import numpy as np
+import pytest
+import xarray as xr
+
+from test_aggregate_figures import synthetic_run
+from ureterfsi import ladder, plotting
+from ureterfsi.config import load_config
+
+SCALED = ("outlet_flux", "stent_max_von_mises", "stent_von_mises_line", "wall_radial_displacement",
+          "hole_velocity_y", "hole_flux")
+
+
+def scaled(ds: xr.Dataset, eps: float) -> xr.Dataset:
+    out = ds.copy(deep=True)
+    for v in SCALED:
+        out[v] = out[v] * (1.0 + eps)
+    return out
+
+
+@pytest.fixture
+def cfg(repo_root):
+    c = load_config(repo_root / "config/config.yaml")
+    c["ladder"]["end"] = 1.0
+    return c
+
+
+def test_identical_rung_has_zero_error_and_scaled_rung_its_scale(cfg):
+    ref = synthetic_run(cfg, "3", end=1.0)
+    for q in ladder.QUANTITIES:
+        assert ladder.relative_error(ref, ref, q) == 0.0
+    run = scaled(ref, 0.03)
+    for q in SCALED:
+        assert ladder.relative_error(ref, run, q) == pytest.approx(0.03, rel=1e-9), q
+
+
+def test_coarser_time_grid_is_interpolated_onto_the_reference_times(cfg):
+    ref = synthetic_run(cfg, "3", end=1.0, dt=0.01)
+    coarse = synthetic_run(cfg, "3", end=1.0, dt=0.04)
+    e = ladder.relative_error(ref, coarse, "outlet_flux")
+    # linear interpolation of A sin t over h = 0.04: error <= h^2/8 max|sin''| / max|sin| on [0, 1]
+    assert 0 < e <= 0.04**2 / 8 / np.sin(1.0) * 1.01
+    assert ladder.relative_error(ref, coarse, "stent_von_mises_line") == pytest.approx(0.0, abs=1e-15)
+
+
+def test_half_model_holes_are_matched_to_the_quarter_model(cfg):
+    quarter = synthetic_run(cfg, "3", end=0.5, symmetry="quarter")
+    half = synthetic_run(cfg, "3", end=0.5, symmetry="half")
+    assert half.sizes["hole"] == 2 * quarter.sizes["hole"]
+    assert ladder.relative_error(quarter, half, "hole_flux") == pytest.approx(0.0, abs=1e-15)
+
+
+def test_cheapest_rung_within_tolerance_is_chosen(cfg):
+    ref = synthetic_run(cfg, "3", end=1.0, wall_time=100.0)
+    runs = {"fully_coupled": ref,
+            "one_way": scaled(synthetic_run(cfg, "3", end=1.0, wall_time=20.0), 0.01),
+            "one_way_dt4": scaled(synthetic_run(cfg, "3", end=1.0, wall_time=5.0), 0.2)}
+    err = xr.DataArray([[ladder.relative_error(ref, r, q) for q in SCALED] for r in runs.values()],
+                       dims=("rung", "quantity"), coords={"rung": list(runs), "quantity": list(SCALED)})
+    cost = xr.DataArray([float(r.attrs["wall_time_s"]) for r in runs.values()], dims="rung",
+                        coords={"rung": list(runs)})
+    pick = ladder.select_rungs(err, cost, {"loose": {"quantities": ["outlet_flux"], "tolerance": 0.5},
+                                           "usual": {"quantities": ["outlet_flux", "hole_flux"], "tolerance": 0.05},
+                                           "strict": {"quantities": ["hole_velocity_y"], "tolerance": 1e-3}})
+    assert pick["loose"][0] == "one_way_dt4" and pick["loose"][1] == pytest.approx(0.2)
+    assert pick["usual"][0] == "one_way" and pick["usual"][1] == pytest.approx(0.01)
+    assert pick["strict"] == ("fully_coupled", 0.0)
+
+
+def test_ladder_dataset_table_and_figure(cfg, tmp_path):
+    cfg["ladder"]["rungs"] = {"fully_coupled": {"fidelity": "fully_coupled", "symmetry": "quarter",
+                                                "level": "coarse", "dt": 0.01},
+                              "one_way": {"fidelity": "one_way", "symmetry": "quarter", "level": "coarse", "dt": 0.01}}
+    ref = synthetic_run(cfg, "3", end=1.0, wall_time=100.0)
+    one = scaled(synthetic_run(cfg, "3", end=1.0, wall_time=20.0), 0.02)
+    one.attrs["one_way_max_stent_displacement"] = 4e-8
+    paths = {}
+    for name, ds in (("fully_coupled", ref), ("one_way", one)):
+        paths[name] = tmp_path / f"{name}.nc"
+        ds.to_netcdf(paths[name])
+    ds = ladder.ladder_dataset(paths, cfg)
+    assert ds["error"].dims == ("rung", "quantity")
+    assert float(ds["error"].sel(rung="one_way", quantity="outlet_flux")) == pytest.approx(0.02)
+    assert set(ds["chosen_rung"].values) == {"one_way"}               # every scene tolerates 5 %
+    for name, var in ds.variables.items():
+        assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
+    assert ds.attrs["reference"] == "fully_coupled" and ds.attrs["run_one_way_one_way_max_stent_displacement"] == 4e-8
+    table = ladder.ladder_table(ds)
+    assert "| one_way | one_way | quarter | coarse |" in table and "fig04_outlet_flow" in table
+    out = [tmp_path / "pareto.png"]
+    plotting.save_figure(plotting.ladder_pareto(ds), out)
+    assert out[0].stat().st_size > 1000
