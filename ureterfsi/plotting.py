@@ -430,7 +430,7 @@ def stability_map(ds: xr.Dataset):
     (failed cases by the limit they hit, labelled with it and the time), colour = minimum ALE Jacobian,
     ring = baseline, dashed line = stability.volume_tolerance. Right: kinetic energy vs time of the same
     cases (colour = parameter, black = baseline; a cross where a failed case stopped)."""
-    from .stability import AXES, AXIS_PARAMETER
+    from .stability import AXES, AXIS_PARAMETER, format_value
 
     axes_present = [a for a in AXES if a in set(str(x) for x in ds["axis"].values)]
     n = max(len(axes_present), 1)
@@ -484,9 +484,14 @@ def stability_map(ds: xr.Dataset):
         left.set_ylim(min(y.min(), tol if np.isfinite(tol) else y.min()) / 3.0,
                       max(y.max(), tol if np.isfinite(tol) else y.max()) * 6.0)
         positive = x[x > 0]
-        if AXES[name][2] == "log" and positive.size and positive.max() / positive.min() > 3.0:
-            left.set_xscale("log")
-        if left.get_xscale() == "linear":
+        if AXES[name][2] in ("log", "symlog") and positive.size and positive.max() / positive.min() > 3.0:
+            if AXES[name][2] == "symlog" and (x <= 0).any():
+                left.set_xscale("symlog", linthresh=positive.min(), linscale=0.6)
+            else:
+                left.set_xscale("log")
+        if left.get_xscale() == "symlog":
+            left.set_xlim(-0.3 * positive.min(), positive.max() * 1.6)
+        elif left.get_xscale() == "linear":
             pad = 0.08 * (x.max() - x.min() if x.size and x.max() > x.min() else 1.0)
             left.set_xlim(x.min() - pad, x.max() + pad)
         else:
@@ -495,13 +500,13 @@ def stability_map(ds: xr.Dataset):
         ticks = np.unique(x)
         left.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
         left.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
-        fmt = "{:.0f}" if name == "mesh_level" else "{:.3g}"
-        left.xaxis.set_major_formatter(matplotlib.ticker.FixedFormatter([fmt.format(v) for v in ticks]))
+        labels = [f"{v:.0f}" if name == "mesh_level" else format_value(float(f"{v:.3g}")) for v in ticks]
+        left.xaxis.set_major_formatter(matplotlib.ticker.FixedFormatter(labels))
         left.tick_params(axis="x", labelsize=7)
         left.set_xlabel(f"{AXES[name][1]}" + (f" ({unit})" if unit else ""))
         left.set_ylabel("volume balance\nerror (rel.)")
         # right: kinetic energy histories
-        pnorm = (matplotlib.colors.LogNorm(positive.min(), positive.max()) if left.get_xscale() == "log"
+        pnorm = (matplotlib.colors.LogNorm(positive.min(), positive.max()) if left.get_xscale() in ("log", "symlog")
                  and positive.size else matplotlib.colors.Normalize(x.min(), x.max() if x.max() > x.min() else x.min() + 1))
         pcmap = plt.get_cmap("viridis")
         for k, i in enumerate(idx):
@@ -512,7 +517,8 @@ def stability_map(ds: xr.Dataset):
                 continue
             colour = "k" if i in base else pcmap(pnorm(x[k])) if x[k] > 0 or left.get_xscale() == "linear" else "0.5"
             right.plot(t[ok], e[ok], color=colour, lw=1.4 if i in base else 1.0,
-                       label=f"{ds['value_label'].values[i] or 'baseline'}")
+                       label=("baseline " if i in base else "") + (
+                           f"{x[k]:.0f}" if name == "mesh_level" else format_value(float(f"{x[k]:.3g}"))))
             if str(ds["outcome"].values[i]) != "stable" and str(ds["limit"].values[i]) != "volume":
                 right.plot(t[ok][-1], e[ok][-1], marker="x", color="crimson", ms=6, mew=1.5)
         right.set_yscale("log")
@@ -522,8 +528,8 @@ def stability_map(ds: xr.Dataset):
             right.set_ylim(e_all.max() * 1e-4, e_all.max() * 3.0)
         right.set_xlabel("time (s)")
         right.set_ylabel("kinetic\nenergy (J)")
-        right.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), title=name.replace("_", " "),
-                     title_fontsize=6)
+        right.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), title_fontsize=6,
+                     title=name.replace("_", " ") + (f" ({unit})" if unit else ""))
     handles = [plt.Line2D([], [], ls="none", marker=m, markerfacecolor="0.85", markeredgecolor="k", label=lab)
                for key, (m, lab) in STABILITY_MARKERS.items()
                if key == "stable" or key in set(str(v) for v in ds["limit"].values)]

@@ -69,14 +69,15 @@ log = logging.getLogger("ureterfsi.stability")
 SYMMETRY = "axisymmetric"
 
 # axis -> (units, long name, scale of the stability-map axis)
+# (symlog: logarithmic with a linear part around 0, for a list that includes 0)
 AXES = {
     "time_step": ("s", "time step", "log"),
-    "mesh_level": ("1", "mesh level (number of cells of the r-z mesh)", "log"),
-    "bulk_ratio": ("1", "near-incompressibility kappa / (C10 + C01) of the ureter wall", "log"),
-    "density_ratio": ("1", "density ratio ureter wall / urine", "log"),
-    "load_amplitude": ("Pa", "peak traction of the peristaltic pulse", "linear"),
+    "mesh_level": ("1", "r-z mesh level", "log"),
+    "bulk_ratio": ("1", "near-incompressibility kappa / (C10 + C01) of the wall", "log"),
+    "density_ratio": ("1", "density ratio wall / urine", "log"),
+    "load_amplitude": ("Pa", "peak traction of the peristaltic pulse", "symlog"),
     "wave_speed": ("m s-1", "speed of the peristaltic pulse", "log"),
-    "wave_width": ("m", "width of the peristaltic pulse (peristalsis.width_measure)", "log"),
+    "wave_width": ("m", "width of the peristaltic pulse", "log"),
     "viscosity": ("Pa s", "dynamic viscosity of the urine", "log"),
 }
 # parameter variable of the combined dataset behind each axis
