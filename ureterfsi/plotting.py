@@ -549,7 +549,7 @@ def stability_map(ds: xr.Dataset):
 def ladder_pareto(ds: xr.Dataset):
     """Speed-accuracy trade of the fidelity ladder: wall time of each rung against its error for every
     quantity (ureterfsi.ladder); the reference rung (error 0) is drawn on the lower axis limit."""
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    fig, ax = plt.subplots(figsize=(9.5, 4.8))
     errors = ds["error"].values
     positive = errors[np.isfinite(errors) & (errors > 0)]
     floor = 10 ** np.floor(np.log10(positive.min())) / 3 if positive.size else 1e-6
@@ -563,18 +563,18 @@ def ladder_pareto(ds: xr.Dataset):
         e = row["error"].values
         top = np.nanmax(e) if np.isfinite(e).any() and np.nanmax(e) > 0 else floor
         ax.annotate(str(r), (float(row["wall_time"]), top), textcoords="offset points", xytext=(4, 6), fontsize=8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
     if "tolerance" in ds:
         for tol in sorted(set(float(t) for t in ds["tolerance"].values)):
             ax.axhline(tol, color="0.4", ls=":", lw=1)
-            ax.annotate(f"tolerance {tol:g}", (ax.get_xlim()[0], tol), xytext=(2, 2), textcoords="offset points",
-                        fontsize=8, color="0.3")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
+            ax.annotate(f"scene tolerance {tol:g}", (0.01, tol), xycoords=("axes fraction", "data"), xytext=(0, 2),
+                        textcoords="offset points", fontsize=8, color="0.3")
     ax.set_xlabel("wall time of the run (s)")
     ax.set_ylabel(f"relative error vs '{ds.attrs.get('reference', 'reference')}' (-)")
     ax.set_title(f"Fidelity ladder, model {ds.attrs.get('model', '?')}, first {ds.attrs.get('window_s', '?')} s "
                  f"(reference on the lower edge)", fontsize=10)
-    ax.legend(fontsize=7, ncol=2, loc="upper right")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     return fig
