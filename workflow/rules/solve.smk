@@ -23,6 +23,14 @@ def solve_command(config, *, model, level, symmetry, fidelity, mesh, out, log, t
     )
 
 
+def convergence_only_end(w):
+    """Runs that only the mesh-convergence study needs (its model on a level other than study.level) stop at
+    study.convergence_time: Fig. 3 and the GCI look no further (the scene models only what it needs)."""
+    if w.level != config["study"]["level"] and w.model == str(config["study"]["convergence_model"]):
+        return f"--end {config['study']['convergence_time']}"
+    return ""
+
+
 def study_subset(w):
     """The configuration entering one solve (a change re-runs the solve; plotting options do not)."""
     keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
@@ -37,6 +45,7 @@ rule solve:
     params:
         study=study_subset,
         checkpoint="results/checkpoints/{fidelity}/{symmetry}/model{model}_{level}.npz",
+        end=convergence_only_end,
     log:
         "results/logs/solve/{fidelity}/{symmetry}/model{model}_{level}.log",
     benchmark:
@@ -50,4 +59,5 @@ rule solve:
     run:
         solve_command(config, model=wildcards.model, level=wildcards.level, symmetry=wildcards.symmetry,
                       fidelity=wildcards.fidelity, mesh=input.mesh, out=output[0], log=log[0], threads=threads,
-                      extra=f"--checkpoint {params.checkpoint}", tasks=resources.tasks, mpi=resources.mpi)
+                      extra=f"--checkpoint {params.checkpoint} {params.end}", tasks=resources.tasks,
+                      mpi=resources.mpi)
