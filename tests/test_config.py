@@ -31,6 +31,16 @@ MODEL4 = {"label": "x", "stent": True, "hole_pair_spacing": 0.025, "holes": 6}
 BAD = [
     # ---- schema: missing, type, range, unknown key, enum
     ("geometry.length", DELETE, "geometry.length", "required key is missing"),
+    # ---- fidelity ladder and per-model runs (issue 5)
+    ("study.fidelity", "two_way", "study.fidelity", "must be one of"),
+    ("study.runs", {"7": {"fidelity": "one_way"}}, "study.runs.7", "must be a key of models"),
+    ("study.runs", {"3": {"symmetry": "axisymmetric"}}, "study.runs.3.symmetry", "only valid for a model without stent"),
+    ("ladder.reference", "exact", "ladder.reference", "must be one of ladder.rungs"),
+    ("ladder.model", "9", "ladder.model", "must be one of models"),
+    ("ladder.rungs.one_way.level", "ultra", "ladder.rungs.one_way.level", "must be one of mesh.levels"),
+    ("ladder.rungs.one_way.dt", 1.0, "ladder.rungs.one_way.dt", "must be <= ladder.end"),
+    ("ladder.rungs.one_way.symmetry", "axisymmetric", "ladder.rungs.one_way.symmetry", "needs a model without stent"),
+    ("scenes.fig04_outlet_flow.quantities", ["pressure"], "scenes.fig04_outlet_flow.quantities[0]", "must be one of"),
     ("time", DELETE, "time", "required key is missing"),
     ("geometry.length", "abc", "geometry.length", "must be of type number, got str 'abc'"),
     ("models.2.stent", "yes", "models.2.stent", "must be of type boolean"),
@@ -148,6 +158,9 @@ def test_axisymmetric_allowed_without_stents(cfg):
     cfg["models"] = {"1": cfg["models"]["1"]}
     cfg["mesh"]["symmetry"] = "axisymmetric"
     cfg["study"]["convergence_model"] = "1"
+    cfg["ladder"]["model"] = "1"
+    for rung in cfg["ladder"]["rungs"].values():
+        rung["symmetry"] = "axisymmetric"
     validate_config(cfg)
 
 
