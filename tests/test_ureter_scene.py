@@ -103,6 +103,29 @@ def test_one_way_rung_follows_the_fully_coupled_model(mini, mini_one_way):
     assert 0 < ow.attrs["one_way_max_stent_displacement"] < 1e-3 * ow.attrs["one_way_hole_diameter"]
 
 
+def test_sub_domains_keep_their_tags(mini, mini_dir):
+    """The one-way rung solves on the fluid and stent parts of the conforming mesh: every boundary facet of
+    each part carries its parent's tag (interfaces become tagged boundaries), and the parts tile the mesh."""
+    from mpi4py import MPI
+
+    from ureterfsi import tags
+    from ureterfsi.fsi.submesh import extract, untagged_boundary_facets
+    from ureterfsi.mesh import load_mesh
+
+    msh, ct, ft = load_mesh(mini_dir / "model3.msh", MPI.COMM_WORLD)
+    fluid = extract(msh, ct, ft, [tags.FLUID])
+    stent = extract(msh, ct, ft, [tags.STENT])
+    for part, expected in ((fluid, {tags.INLET, tags.OUTLET, tags.FLUID_URETER, tags.FLUID_STENT,
+                                    tags.SYMMETRY_X, tags.SYMMETRY_Y}),
+                           (stent, {tags.STENT_ENDS, tags.FLUID_STENT, tags.SYMMETRY_X, tags.SYMMETRY_Y})):
+        assert untagged_boundary_facets(part).size == 0
+        assert set(np.unique(part.facet_tags.values)) == expected
+    n = lambda m: m.topology.index_map(m.topology.dim).size_local   # noqa: E731
+    assert n(fluid.mesh) == ct.find(tags.FLUID).size and n(stent.mesh) == ct.find(tags.STENT).size
+    # the interface seen from both sides: the same number of facets
+    assert fluid.facet_tags.find(tags.FLUID_STENT).size == stent.facet_tags.find(tags.FLUID_STENT).size
+
+
 def test_load_is_the_configured_gaussian(repo_root):
     cfg = load_config_files([repo_root / "config/config.yaml"])
     p = cfg["peristalsis"]

@@ -247,9 +247,6 @@ class QuasiStaticStent:
         self.von_mises.update()
         self.wall_time += _time.perf_counter() - t0
 
-    def interface_force(self) -> np.ndarray:
-        """Total force (N) of the urine on the stent (sum of the nodal forces), for checks."""
-        return self.f.array_r[self.stent_dofs].sum(axis=0)
 
 
 # ------------------------------------------------------------------------------------------------
