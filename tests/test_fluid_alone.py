@@ -106,3 +106,33 @@ def test_segregated_mesh_motion_matches_the_monolithic_one():
         msh, ct, ft = tube(2)
         MonolithicFSI(Scene(msh, ct, ft, solids=[SolidRegion([FLUID], LinearElastic(1e6, 0.3, 1e3))],
                             axisymmetric=True), SolverOptions(mesh_motion_coupling="segregated"))
+
+
+def test_failed_factorisation_is_reported_not_used():
+    """A factorisation that fails (MUMPS out of workspace or memory: the fine one-way urine system on 24 GiB)
+    must stop Newton with the solver's reason, not feed NaN updates into the state."""
+    msh, ct, ft = tube(2)
+    scene = Scene(msh, ct, ft, fluid=FluidRegion([FLUID], NewtonianFluid(1000.0, 1e-3)),
+                  open_boundaries=[OpenBoundary([TOP], normal_stress=1.0)],
+                  dirichlet=[DirichletCondition("velocity", [BOTTOM, WALL]),
+                             DirichletCondition("velocity", [AXIS], components=[0]),
+                             DirichletCondition("displacement", [WALL, BOTTOM, TOP]),
+                             DirichletCondition("displacement", [AXIS], components=[0])],
+                  axisymmetric=True)
+    pb = MonolithicFSI(scene, SolverOptions())
+
+
+    class FailingFactorisation:           # the real solver, reporting KSP_DIVERGED_PC_FAILED
+        def __init__(self, ksp):
+            self._ksp = ksp
+
+        def __getattr__(self, name):
+            return getattr(self._ksp, name)
+
+        def getConvergedReason(self):
+            return -11
+
+    pb.ksp = FailingFactorisation(pb.ksp)
+    from ureterfsi.fsi import NewtonDivergence
+    with pytest.raises(NewtonDivergence, match=r"linear solve failed \(PETSc KSP reason -11\); MUMPS INFOG\(1\)"):
+        pb.solve_steady()

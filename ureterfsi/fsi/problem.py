@@ -411,6 +411,18 @@ class MonolithicFSI:
         """Force a fresh Jacobian and factorisation at the next Newton iteration."""
         self._jacobian_valid = False
 
+    def _check_linear_solve(self, history):
+        """A failed factorisation (e.g. MUMPS out of workspace) leaves a useless update: say so."""
+        reason = self.ksp.getConvergedReason()
+        if reason < 0:
+            detail = ""
+            if self.options.linear_solver == "mumps":
+                F = self.ksp.getPC().getFactorMatrix()
+                detail = (f"; MUMPS INFOG(1) = {F.getMumpsInfog(1)}, INFOG(2) = {F.getMumpsInfog(2)} "
+                          f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
+            self._jacobian_valid = False
+            raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
+
     def _reuse_reaches_tolerance(self, contraction, r, r0):
         """A slow but steady contraction that meets the tolerance within `reuse_patience` iterations
         costs less than a new factorisation (one factorisation ~ tens of reused solves in 3D)."""
@@ -446,6 +458,7 @@ class MonolithicFSI:
                 self.ksp.setOperators(self.A)
             t0 = _time.perf_counter()
             self.ksp.solve(self.b, self.dx_vec)
+            self._check_linear_solve(history)
             self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
             self.counters["factorisations" if fresh else "reused_solves"] += 1
             self.x.vector.axpy(-1.0, self.dx_vec)
