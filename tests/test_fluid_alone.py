@@ -136,3 +136,28 @@ def test_failed_factorisation_is_reported_not_used():
     from ureterfsi.fsi import NewtonDivergence
     with pytest.raises(NewtonDivergence, match=r"linear solve failed \(PETSc KSP reason -11\); MUMPS INFOG\(1\)"):
         pb.solve_steady()
+
+
+def test_kept_factorisation_only_serves_the_same_operator():
+    """With factorisation reuse, a Jacobian is kept only for the same b0/dt: the steady start (no inertia),
+    the Backward Euler first step and the BDF2 steps each get their own; equal steps then reuse it."""
+    msh, ct, ft = tube(4)
+    scene = Scene(msh, ct, ft, fluid=FluidRegion([FLUID], NewtonianFluid(1000.0, 1e-3)),
+                  open_boundaries=[OpenBoundary([TOP], normal_stress=0.0)],
+                  dirichlet=[DirichletCondition("velocity", [BOTTOM]),
+                             DirichletCondition("velocity", [WALL], lambda x, t: np.vstack(
+                                 [A * OMEGA * math.cos(OMEGA * t) * x[0], np.zeros_like(x[1])])),
+                             DirichletCondition("velocity", [AXIS], components=[0]),
+                             DirichletCondition("displacement", [WALL, BOTTOM, TOP], wall_displacement),
+                             DirichletCondition("displacement", [AXIS], components=[0])],
+                  axisymmetric=True)
+    pb = MonolithicFSI(scene, SolverOptions(reuse_jacobian=True, reuse_contraction=0.9))
+    pb.solve_steady()
+    fresh = []
+    for _ in range(4):
+        before = pb.counters["factorisations"]
+        pb.step(2e-3)
+        fresh.append(pb.counters["factorisations"] - before)
+    # BE step after the steady start, first BDF2 step: new operators; later equal BDF2 steps: none needed
+    assert fresh[0] >= 1 and fresh[1] >= 1, fresh
+    assert fresh[3] == 0, fresh

@@ -33,7 +33,8 @@ from petsc4py import PETSc
 from . import tags
 from .fsi import Observer, physics
 from .fsi.operators import Operators
-from .fsi.problem import MonolithicFSI
+from .fsi.problem import MonolithicFSI, dirichlet_bcs
+from .fsi.scene import DirichletCondition
 from .fsi.submesh import SubDomain
 from .probes import CellField, PointProbe, von_mises
 
@@ -184,17 +185,12 @@ class QuasiStaticStent:
         self.u = fem.Function(V, name="stent_displacement")
         dx = ufl.Measure("dx", domain=msh, metadata={"quadrature_degree": fluid_pb.options.quadrature_degree})
         a = physics.elastic_residual(ops, material, ufl.TrialFunction(V), ufl.TestFunction(V), dx)
-        fdim = msh.topology.dim - 1
-        ft = stent.facet_tags
-        bcs = [fem.dirichletbc(np.zeros(3), fem.locate_dofs_topological(V, fdim, ft.find(tags.STENT_ENDS)), V)]
+        # fixed end faces (paper eq. 20) and the mirror planes of the half / quarter models
+        conditions = [DirichletCondition("displacement", [tags.STENT_ENDS])]
         if symmetric_planes:
-            for tag, comp in ((tags.SYMMETRY_X, 0), (tags.SYMMETRY_Y, 1)):
-                facets = ft.find(tag)
-                if facets.size:
-                    Vc, _ = V.sub(comp).collapse()
-                    dofs = fem.locate_dofs_topological((V.sub(comp), Vc), fdim, facets)
-                    bcs.append(fem.dirichletbc(fem.Function(Vc), dofs, V.sub(comp)))
-        self.bcs = bcs
+            conditions += [DirichletCondition("displacement", [tag], components=[comp])
+                           for tag, comp in ((tags.SYMMETRY_X, 0), (tags.SYMMETRY_Y, 1))]
+        self.bcs = bcs = [bc for cond in conditions for bc, _, _ in dirichlet_bcs(cond, V, stent.facet_tags)]
         A = fem_petsc.assemble_matrix(fem.form(a), bcs=bcs)
         A.assemble()
         self.ksp = ksp = PETSc.KSP().create(msh.comm)

@@ -47,15 +47,32 @@ class SolverOptions:
     newton_stol: float = 1e-11          # relative Newton increment ||dx|| / ||x||
     newton_max_iterations: int = 15
     reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
-    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this ...
-    reuse_patience: int = 0             # ... unless that contraction (< 0.9) reaches the tolerance within
-                                        # this many more iterations (0: always refactorise)
+    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
     linear_solver: str = "mumps"
     # "monolithic": mesh-motion rows solved with the physics (needed whenever a solid moves the fluid
     # boundary); "segregated": fluid-alone scenes whose boundary motion is prescribed - the mesh motion
     # is a linear problem of its own (factorised once) solved before each step, and the Newton system
     # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
     mesh_motion_coupling: str = "monolithic"
+
+
+def dirichlet_bcs(cond, base, facet_tags) -> list:
+    """[(DirichletBC, value function, component)] of a DirichletCondition on the space `base` (a space or a
+    subspace of a mixed space): the whole vector, or each listed component; values start at zero."""
+    fdim = base.mesh.topology.dim - 1
+    facets = np.unique(np.concatenate([facet_tags.find(t) for t in cond.tags])).astype(np.int32)
+    out = []
+    for c in [None] if cond.components is None else list(cond.components):
+        space = base if c is None else base.sub(c)
+        if space.component():      # a subspace: the value lives in its collapsed space
+            collapsed, _ = space.collapse()
+            g = fem.Function(collapsed)
+            bc = fem.dirichletbc(g, fem.locate_dofs_topological((space, collapsed), fdim, facets), space)
+        else:
+            g = fem.Function(space)
+            bc = fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets))
+        out.append((bc, g, c))
+    return out
 
 
 class NewtonDivergence(RuntimeError):
@@ -251,21 +268,11 @@ class MonolithicFSI:
             self.dirichlet_bcs.append(fem.dirichletbc(self.mesh_displacement, dofs, self.sub("displacement")))
 
     def _conditions(self, cond, base):
-        fdim = self.mesh.topology.dim - 1
-        ft = self.scene.facet_tags
-        facets = np.unique(np.concatenate([ft.find(t) for t in cond.tags])).astype(np.int32)
         bcs = []
-        for c in [None] if cond.components is None else list(cond.components):
-            space = base if c is None else base.sub(c)
-            if space.component():      # a subspace: the value lives in its collapsed space
-                collapsed, _ = space.collapse()
-                g = fem.Function(collapsed)
-                bcs.append(fem.dirichletbc(g, fem.locate_dofs_topological((space, collapsed), fdim, facets), space))
-            else:
-                g = fem.Function(space)
-                bcs.append(fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets)))
+        for bc, g, comp in dirichlet_bcs(cond, base, self.scene.facet_tags):
+            bcs.append(bc)
             if cond.value is not None:
-                self._bc_updates.append((g, cond.value, c))
+                self._bc_updates.append((g, cond.value, comp))
         return bcs
 
     def _update_bcs(self, t):
@@ -423,15 +430,6 @@ class MonolithicFSI:
             self._jacobian_valid = False
             raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
 
-    def _reuse_reaches_tolerance(self, contraction, r, r0):
-        """A slow but steady contraction that meets the tolerance within `reuse_patience` iterations
-        costs less than a new factorisation (one factorisation ~ tens of reused solves in 3D)."""
-        o = self.options
-        if not o.reuse_patience or contraction >= 0.9:
-            return False
-        target = max(o.newton_atol, o.newton_rtol * r0)
-        return r <= target or math.log(target / r) / math.log(contraction) <= o.reuse_patience
-
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
@@ -450,9 +448,7 @@ class MonolithicFSI:
             if it == o.newton_max_iterations:
                 break
             contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            fresh = not (o.reuse_jacobian and self._jacobian_current()
-                         and (contraction < o.reuse_contraction
-                              or self._reuse_reaches_tolerance(contraction, r, r0)))
+            fresh = not (o.reuse_jacobian and self._jacobian_current() and contraction < o.reuse_contraction)
             if fresh:
                 self._assemble_jacobian()
                 self.ksp.setOperators(self.A)
