@@ -68,6 +68,11 @@ BAD = [
     ("solver.linear_solver", "pardiso", "solver.linear_solver", "must be one of"),
     ("peristalsis.direction", "sideways", "peristalsis.direction", "must be one of"),
     ("solver.newton_max_iterations", 0, "solver.newton_max_iterations", "must be >= 1"),
+    ("solver.krylov_rtol", 0.5, "solver.krylov_rtol", "must be <= 0.01"),
+    ("solver.mesh_motion_direct_max_unknowns", 10, "solver.mesh_motion_direct_max_unknowns", "must be >= 1000"),
+    ("study.memory_mb.one_way.fine", 50, "study.memory_mb.one_way.fine", "must be >= 100"),
+    ("study.memory_mb.one_way", {}, "study.memory_mb.one_way", "at least 1"),
+    ("study.memory_mb.fully_coupled", "lots", "study.memory_mb.fully_coupled", "must be of type object"),
     # ---- geometry
     ("geometry.ureter_wall_thickness", 0.005, "geometry.ureter_wall_thickness", "ureter outer radius"),
     ("geometry.hole_diameter", 0.0025, "geometry.hole_diameter", "stent outer diameter"),

@@ -54,7 +54,9 @@ def solver_options(cfg: dict) -> SolverOptions:
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
                          newton_max_iterations=s["newton_max_iterations"], linear_solver=s["linear_solver"],
-                         reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"])
+                         reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
+                         mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
+                         krylov_rtol=s["krylov_rtol"])
 
 
 class CoupledWall:

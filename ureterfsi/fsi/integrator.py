@@ -142,6 +142,7 @@ class TimeIntegrator:
         while pb.time < s.end - eps:
             target = min([s.end] + [t for t in outputs if t > pb.time + eps])
             dt_try = min(dt, target - pb.time)
+            krylov0 = getattr(pb, "counters", {}).get("krylov_iterations")
             for attempt in range(s.max_halvings + 1):  # noqa: B007 - attempt tells if dt was halved
                 tic = _time.perf_counter()
                 try:
@@ -165,8 +166,10 @@ class TimeIntegrator:
             elapsed = _time.perf_counter() - wall0
             done = (pb.time - t0) / max(s.end - t0, 1e-300)
             eta = elapsed * (1.0 - done) / max(done, 1e-12)
-            log.info("step %5d  t=%.5f s  dt=%.3e s  newton=%2d  residual=%.3e (from %.3e)  "
-                     "min J_ale=%.4f  %.2f s/step  ETA %s", step, pb.time, dt_try, its, history[-1],
+            krylov = getattr(pb, "counters", {}).get("krylov_iterations")
+            log.info("step %5d  t=%.5f s  dt=%.3e s  newton=%2d%s  residual=%.3e (from %.3e)  "
+                     "min J_ale=%.4f  %.2f s/step  ETA %s", step, pb.time, dt_try, its,
+                     "" if krylov is None else f"  krylov={krylov - krylov0:3d}", history[-1],
                      history[0], jmin, wall, _format_seconds(eta))
             if jmin <= s.min_ale_jacobian:
                 raise SolveFailure(f"ALE mesh inverted at t={pb.time:.6g} s (step {step}): minimum "

@@ -16,6 +16,16 @@ def run_fidelity(model):
     return config["study"]["runs"].get(str(model), {}).get("fidelity", FIDELITY)
 
 
+def solve_mem_mb(fidelity, symmetry, level):
+    """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
+    their fidelity's entry for the level (a level without one: that fidelity's largest entry)."""
+    table = config["study"]["memory_mb"]
+    if symmetry == "axisymmetric":
+        return int(table["axisymmetric"])
+    per_level = table[fidelity]
+    return int(per_level.get(level, max(per_level.values())))
+
+
 wildcard_constraints:
     model="|".join(MODELS),
     level="|".join(LEVELS),

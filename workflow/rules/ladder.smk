@@ -27,7 +27,7 @@ if LADDER:
             "results/benchmarks/ladder/{rung}.tsv"
         threads: 1
         resources:
-            mem_mb=16000,
+            mem_mb=lambda w: solve_mem_mb(**{k: LADDER_RUNGS[w.rung][k] for k in ("fidelity", "symmetry", "level")}),
             runtime=24 * 60,
         run:
             r = params.rung

@@ -54,7 +54,7 @@ rule solve:
     resources:
         tasks=1,
         mpi="mpiexec",
-        mem_mb=16000,
+        mem_mb=lambda w: solve_mem_mb(w.fidelity, w.symmetry, w.level),
         runtime=24 * 60,
     run:
         solve_command(config, model=wildcards.model, level=wildcards.level, symmetry=wildcards.symmetry,

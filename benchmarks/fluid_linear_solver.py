@@ -1,0 +1,123 @@
+"""Linear solvers of the one-way urine system (fluid alone, segregated mesh motion): direct LU vs fieldsplit.
+
+Builds the urine problem of a study mesh as the one-way rung does (wall motion from the r-z wall solve),
+advances a few steps with the configured solver, then solves one and the same Newton system (Jacobian and
+residual at the next step) with each variant and reports the first solve (with the factorisation or the
+preconditioner set-up), a second solve with them kept, Krylov iterations, the memory MUMPS reports for its
+factorisation (INFOG(22), MB) and the process's peak memory so far. Variants: LU of the whole mixed system,
+LU of the flow block alone (the engine's direct solve), GMRES + Schur fieldsplit with ILU(0) (the engine's
+`fieldsplit`) or BoomerAMG on the velocity block. The fieldsplit variants stop at the configured krylov_rtol.
+
+    python benchmarks/fluid_linear_solver.py --level coarse
+    python benchmarks/fluid_linear_solver.py --level medium --variants lu_flow fieldsplit_ilu
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import resource
+import time
+from pathlib import Path
+
+import netCDF4  # noqa: F401  (before dolfinx)
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from ureterfsi import oneway, tags
+from ureterfsi.config import load_config_files
+from ureterfsi.fsi.problem import MonolithicFSI
+from ureterfsi.fsi.submesh import extract
+from ureterfsi.mesh import load_mesh
+from ureterfsi.scenes.ureter import ureter_fluid_scene
+from ureterfsi.study import solver_options
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# PETSc options of each variant
+LU = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 5}
+VARIANTS = {
+    "lu_whole": LU,                                       # LU of the whole mixed system (before)
+    "lu_flow": {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",   # the engine's
+                "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
+                **{f"fieldsplit_flow_{k}": v for k, v in LU.items()}},
+    "fieldsplit_ilu": {"fieldsplit_momentum_pc_type": "ilu"},            # linear_solver: fieldsplit
+    "fieldsplit_amg": {"fieldsplit_momentum_pc_type": "hypre",
+                       "fieldsplit_momentum_pc_hypre_boomeramg_strong_threshold": 0.5},
+}
+FIELDSPLIT = {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_pc_side": "right", "ksp_max_it": 400,
+              "pc_type": "fieldsplit", "pc_fieldsplit_type": "schur", "pc_fieldsplit_schur_fact_type": "lower",
+              "pc_fieldsplit_schur_precondition": "selfp", "fieldsplit_momentum_ksp_type": "preonly",
+              "fieldsplit_pressure_ksp_type": "preonly", "fieldsplit_pressure_pc_type": "hypre"}
+
+
+def urine_problem(cfg, model, level, steps):
+    dt = cfg["time"]["dt"]
+    history = oneway.wall_history(cfg, (steps + 1) * dt, dt)
+    mesh, ct, ft = load_mesh(ROOT / f"results/meshes/quarter/model{model}_{level}.msh", MPI.COMM_WORLD)
+    fluid = extract(mesh, ct, ft, [tags.FLUID])
+    u_wall, v_wall = oneway.inner_wall_motion(history, False)
+    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, False)
+    options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
+    pb = MonolithicFSI(scene, options)
+    pb.solve_steady(0.0)
+    for _ in range(steps):
+        pb.step(dt)
+    # the Newton system of the next step at the previous state
+    pb.set_bdf(dt)
+    pb.t.value = pb.time + dt
+    pb._update_bcs(pb.time + dt)
+    pb.solve_mesh_motion()
+    pb._assemble_residual()
+    pb._assemble_jacobian()
+    return pb
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--config", nargs="+", default=[str(ROOT / "config/config.yaml")])
+    ap.add_argument("--model", default="3")
+    ap.add_argument("--level", default="coarse", help="a quarter mesh under results/meshes (snakemake all_meshes)")
+    ap.add_argument("--steps", type=int, default=3, help="time steps before the measured system")
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    args = ap.parse_args()
+    cfg = load_config_files(args.config)
+    pb = urine_problem(cfg, args.model, args.level, args.steps)
+    print(f"model {args.model}, level {args.level} (quarter): {pb.A.getSize()[0]} unknowns, "
+          f"{pb.A.getInfo()['nz_used']:.3e} stored nonzeros, krylov_rtol {cfg['solver']['krylov_rtol']:.0e}")
+    print("| variant | set-up + first solve (s) | kept solve (s) | Krylov iterations | LU memory (MB) | max RSS (GiB) |")
+    print("|---|---|---|---|---|---|")
+    flow_is = pb._field_is({"mirror": ["displacement"], "flow": ["velocity", "pressure"]})
+    schur_is = pb._field_is({"momentum": ["velocity", "displacement"], "pressure": ["pressure"]})
+    for name in args.variants:
+        prefix = f"bench_{name}_"
+        opts = VARIANTS[name] if name.startswith("lu") else FIELDSPLIT | VARIANTS[name] | {
+            "ksp_rtol": cfg["solver"]["krylov_rtol"], "ksp_atol": 0.0}
+        for key, value in opts.items():
+            PETSc.Options()[prefix + key] = value
+        ksp = PETSc.KSP().create(MPI.COMM_WORLD)
+        ksp.setOptionsPrefix(prefix)
+        ksp.setOperators(pb.A)
+        if name != "lu_whole":
+            ksp.getPC().setType("fieldsplit")
+            ksp.getPC().setFieldSplitIS(*(flow_is if name == "lu_flow" else schur_is))
+        ksp.setFromOptions()
+        x = pb.b.duplicate()
+        t0 = time.perf_counter()
+        ksp.solve(pb.b, x)
+        t1 = time.perf_counter()
+        ksp.solve(pb.b, x)
+        t2 = time.perf_counter()
+        lu_mb = "-"
+        if name.startswith("lu"):
+            pc = ksp.getPC().getFieldSplitSubKSP()[1].getPC() if name == "lu_flow" else ksp.getPC()
+            lu_mb = pc.getFactorMatrix().getMumpsInfog(22)
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
+        its = "-" if name.startswith("lu") else ksp.getIterationNumber()
+        print(f"| {name} | {t1 - t0:.2f} | {t2 - t1:.2f} | {its} | {lu_mb} | {rss:.2f} |", flush=True)
+        if ksp.getConvergedReason() < 0:
+            print(f"  {name}: KSP reason {ksp.getConvergedReason()}")
+        ksp.destroy()
+
+
+if __name__ == "__main__":
+    main()
