@@ -303,7 +303,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
         "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
         "solver": (f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
-                   f"P2-P1, segregated mesh motion, BDF2, Newton + {pb.linear_solver}) -> "
+                   f"P2-P1, segregated mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
                    f"quasi-static linear stent (LU once)"),
         "timings": {k: round(v, 2) for k, v in pb.timings.items()},
         "wall_solve_time_s": round(history.wall_time, 2),

@@ -126,7 +126,6 @@ class MonolithicFSI:
         self.W = W = fem.FunctionSpace(mesh, ufl.MixedElement(list(elements.values())))
         self.index = {name: i for i, name in enumerate(self.field_names)}
         self.unknowns = W.dofmap.index_map.size_global * W.dofmap.index_map_bs
-        self.linear_solver = opts.linear_solver
 
         self.x = fem.Function(W, name="state")
         self.x_n = fem.Function(W)
@@ -214,7 +213,7 @@ class MonolithicFSI:
         prefix = f"ureterfsi_{id(self)}_"
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.A)
-        if self.linear_solver == "fieldsplit":
+        if self.options.linear_solver == "fieldsplit":
             self._setup_fieldsplit(prefix)
         elif self.segregated:
             self._setup_flow_lu(prefix)
@@ -222,8 +221,8 @@ class MonolithicFSI:
             self.ksp.setType("preonly")
             pc = self.ksp.getPC()
             pc.setType("lu")
-            pc.setFactorSolverType(self.linear_solver)
-            if self.linear_solver == "mumps":
+            pc.setFactorSolverType(self.options.linear_solver)
+            if self.options.linear_solver == "mumps":
                 # METIS fill-reducing nested-dissection ordering (suits 3D meshes)
                 PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5
         self.ksp.setFromOptions()
@@ -231,7 +230,7 @@ class MonolithicFSI:
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
                         "mesh_motion": 0.0}
         self.counters = {"factorisations": 0, "reused_solves": 0}
-        if self.linear_solver == "fieldsplit":
+        if self.options.linear_solver == "fieldsplit":
             self.counters["krylov_iterations"] = 0
         self.min_jacobian_expr = None
         if fluid_tags:
@@ -355,9 +354,9 @@ class MonolithicFSI:
         for key, value in {"ksp_type": "preonly", "pc_fieldsplit_type": "additive",
                            "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
                            "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
-                           "fieldsplit_flow_pc_factor_mat_solver_type": self.linear_solver}.items():
+                           "fieldsplit_flow_pc_factor_mat_solver_type": self.options.linear_solver}.items():
             o[f"{prefix}{key}"] = value
-        if self.linear_solver == "mumps":
+        if self.options.linear_solver == "mumps":
             o[f"{prefix}fieldsplit_flow_mat_mumps_icntl_7"] = 5
         pc = self.ksp.getPC()
         pc.setType("fieldsplit")
@@ -422,7 +421,7 @@ class MonolithicFSI:
         else:
             ksp.setType("preonly")
             ksp.getPC().setType("lu")
-            direct = "mumps" if self.linear_solver == "fieldsplit" else self.linear_solver
+            direct = "mumps" if self.options.linear_solver == "fieldsplit" else self.options.linear_solver
             ksp.getPC().setFactorSolverType(direct)
             if direct == "mumps":
                 ksp.setOptionsPrefix(f"ureterfsi_mesh_{id(self)}_")
@@ -526,10 +525,10 @@ class MonolithicFSI:
         reason = self.ksp.getConvergedReason()
         if reason < 0:
             detail = ""
-            if self.linear_solver == "fieldsplit":
+            if self.options.linear_solver == "fieldsplit":
                 detail = (f" after {self.ksp.getIterationNumber()} Krylov iterations, residual "
                           f"{self.ksp.getResidualNorm():.3e} (-3: iteration limit, -5/-9: breakdown/NaN)")
-            elif self.linear_solver == "mumps":
+            elif self.options.linear_solver == "mumps":
                 F = self._factor_matrix()
                 detail = (f"; MUMPS INFOG(1) = {F.getMumpsInfog(1)}, INFOG(2) = {F.getMumpsInfog(2)} "
                           f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
