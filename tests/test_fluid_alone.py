@@ -191,7 +191,8 @@ def test_segregated_flow_block_lu_failure_is_reported():
     names = [k.getOptionsPrefix() for k in pb.ksp.getPC().getFieldSplitSubKSP()]
     assert names[0].endswith("fieldsplit_mirror_") and names[1].endswith("fieldsplit_flow_")
     flow_size = pb.ksp.getPC().getFieldSplitSubKSP()[1].getOperators()[0].getSize()[0]
-    assert flow_size == pb.unknowns - pb.mesh_space.dofmap.index_map.size_global * 2
+    mirror = pb.mesh_space.dofmap.index_map.size_global * pb.mesh_space.dofmap.index_map_bs
+    assert flow_size == pb.unknowns - mirror
     pb._factor_matrix().setMumpsIcntl(23, 1)        # the flow block's factor, capped at 1 MB
     pb.invalidate_jacobian()
     with pytest.raises(NewtonDivergence, match=r"linear solve failed \(PETSc KSP reason -11\); MUMPS INFOG\(1\) = -"):

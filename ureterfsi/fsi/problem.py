@@ -84,6 +84,29 @@ def dirichlet_bcs(cond, base, facet_tags) -> list:
     return out
 
 
+def flow_lu_options(package: str) -> dict:
+    """PETSc options (under the KSP prefix) of the segregated direct solve: PCFieldSplit additive over the
+    splits "mirror" (Jacobi) and "flow" (LU by `package`; METIS ordering for MUMPS)."""
+    opts = {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",
+            "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
+            "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
+            "fieldsplit_flow_pc_factor_mat_solver_type": package}
+    if package == "mumps":
+        opts["fieldsplit_flow_mat_mumps_icntl_7"] = 5
+    return opts
+
+
+def schur_fieldsplit_options(rtol: float, max_iterations: int) -> dict:
+    """PETSc options (under the KSP prefix) of linear_solver "fieldsplit" over the splits "momentum" and
+    "pressure": GMRES, lower Schur factorisation with the "selfp" approximation, ILU(0) / BoomerAMG."""
+    return {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_pc_side": "right", "ksp_rtol": rtol,
+            "ksp_atol": 0.0, "ksp_max_it": max_iterations, "pc_type": "fieldsplit",
+            "pc_fieldsplit_type": "schur", "pc_fieldsplit_schur_fact_type": "lower",
+            "pc_fieldsplit_schur_precondition": "selfp",
+            "fieldsplit_momentum_ksp_type": "preonly", "fieldsplit_momentum_pc_type": "ilu",
+            "fieldsplit_pressure_ksp_type": "preonly", "fieldsplit_pressure_pc_type": "hypre"}
+
+
 class NewtonDivergence(RuntimeError):
     """Newton failed to converge (or produced a non-finite residual) in one step."""
 
@@ -351,13 +374,8 @@ class MonolithicFSI:
         isolated mirror dofs slowly; measured on the coarse model 3 (benchmarks/fluid_linear_solver.py): LU
         memory 4.2 GB -> 1.1 GB, factorisation 20-37 s -> 6 s, solve 0.25-0.58 s -> 0.09 s."""
         o = PETSc.Options()
-        for key, value in {"ksp_type": "preonly", "pc_fieldsplit_type": "additive",
-                           "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
-                           "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
-                           "fieldsplit_flow_pc_factor_mat_solver_type": self.options.linear_solver}.items():
+        for key, value in flow_lu_options(self.options.linear_solver).items():
             o[f"{prefix}{key}"] = value
-        if self.options.linear_solver == "mumps":
-            o[f"{prefix}fieldsplit_flow_mat_mumps_icntl_7"] = 5
         pc = self.ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*self._field_is({"mirror": ["displacement"],
@@ -378,20 +396,13 @@ class MonolithicFSI:
         block cost 7x more for the same iteration count: benchmarks/fluid_linear_solver.py), BoomerAMG on
         the Schur approximation. The mirrored mesh-displacement rows (identity) go with the velocity block."""
         o = PETSc.Options()
-        for key, value in {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_pc_side": "right",
-                           "ksp_rtol": self.options.krylov_rtol, "ksp_atol": 0.0,
-                           "ksp_max_it": self.options.krylov_max_iterations,
-                           "pc_fieldsplit_type": "schur", "pc_fieldsplit_schur_fact_type": "lower",
-                           "pc_fieldsplit_schur_precondition": "selfp",
-                           "fieldsplit_momentum_ksp_type": "preonly", "fieldsplit_momentum_pc_type": "ilu",
-                           "fieldsplit_pressure_ksp_type": "preonly", "fieldsplit_pressure_pc_type": "hypre",
-                           }.items():
+        for key, value in schur_fieldsplit_options(self.options.krylov_rtol,
+                                                   self.options.krylov_max_iterations).items():
             o[f"{prefix}{key}"] = value
         pc = self.ksp.getPC()
         pc.setType("fieldsplit")
-        self._fieldsplit_is = self._field_is({"momentum": [f for f in self.field_names if f != "pressure"],
-                                              "pressure": ["pressure"]})
-        pc.setFieldSplitIS(*self._fieldsplit_is)
+        pc.setFieldSplitIS(*self._field_is({"momentum": [f for f in self.field_names if f != "pressure"],
+                                            "pressure": ["pressure"]}))
 
     def _setup_mesh_motion(self, dx_fluid):
         """Segregated mesh motion: the linear extension problem, assembled and factorised once."""
