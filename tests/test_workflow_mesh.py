@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import yaml
+
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -12,10 +14,31 @@ def _snakemake(*args, cwd=REPO):
                           timeout=600)
 
 
+def _jobs(stdout):
+    """{output: {key: value}} of the jobs a dry run lists (the indented `key: value` lines of each job)."""
+    jobs = {}
+    for block in stdout.split("rule ")[1:]:
+        fields = dict(line.strip().split(": ", 1) for line in block.splitlines()[1:]
+                      if line.startswith("    ") and ": " in line)
+        if "output" in fields:
+            jobs[fields["output"].split(", ")[0]] = fields
+    return jobs
+
+
 def test_dry_run_of_default_target():
+    """The default target plans every mesh and solve; the longest jobs (finest level) get the highest
+    priority, and the default profile's memory budget fits the fine run beside a coarse one."""
     run = _snakemake("-n", "--forceall", "--cores", "2")
     assert run.returncode == 0, run.stderr[-3000:]
     assert "rule mesh:" in run.stdout
+    jobs = _jobs(run.stdout)
+    fine, medium, coarse = (jobs[f"results/runs/one_way/quarter/model3_{lv}.nc"] for lv in ("fine", "medium", "coarse"))
+    assert int(fine["priority"]) > int(medium["priority"]) > int(coarse.get("priority", 0))
+    assert int(jobs["results/meshes/quarter/model3_fine.msh"]["priority"]) == int(fine["priority"])
+    mem = {k: int(dict(kv.split("=") for kv in job["resources"].split(", "))["mem_mb"])
+           for k, job in (("fine", fine), ("coarse", coarse))}
+    profile = yaml.safe_load((REPO / "workflow/profiles/default/config.yaml").read_text())
+    assert mem["fine"] + mem["coarse"] <= profile["resources"]["mem_mb"]
 
 
 def test_workflow_builds_one_coarse_mesh(tmp_path):

@@ -306,6 +306,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
                    f"P2-P1, segregated mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
                    f"quasi-static linear stent (LU once)"),
         "timings": {k: round(v, 2) for k, v in pb.timings.items()},
+        "counters": dict(pb.counters),
         "wall_solve_time_s": round(history.wall_time, 2),
         "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
         "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],

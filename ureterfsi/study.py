@@ -53,7 +53,8 @@ def solver_options(cfg: dict) -> SolverOptions:
     s = cfg["solver"]
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
-                         newton_max_iterations=s["newton_max_iterations"], linear_solver=s["linear_solver"],
+                         newton_max_iterations=s["newton_max_iterations"], predictor=s["predictor"],
+                         linear_solver=s["linear_solver"],
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
                          mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
                          krylov_rtol=s["krylov_rtol"])
@@ -353,7 +354,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
         "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
         "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}",
-        "timings": {k: round(v, 2) for k, v in pb.timings.items()}})
+        "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)})
     if comm.rank == 0:
         with atomic_path(out_path) as tmp:
             ds.to_netcdf(tmp)

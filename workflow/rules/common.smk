@@ -16,6 +16,14 @@ def run_fidelity(model):
     return config["study"]["runs"].get(str(model), {}).get("fidelity", FIDELITY)
 
 
+def level_priority(w):
+    """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
+    run of the mesh study is the critical path of the default reproduction, so it starts as soon as its mesh
+    exists and the coarse runs fill the other core around it)."""
+    factors = sorted({float(v["size_factor"]) for v in config["mesh"]["levels"].values()}, reverse=True)
+    return factors.index(float(config["mesh"]["levels"][w.level]["size_factor"]))
+
+
 def solve_mem_mb(fidelity, symmetry, level):
     """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
     their fidelity's entry for the level (a level without one: that fidelity's largest entry)."""

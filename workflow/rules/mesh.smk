@@ -16,6 +16,7 @@ rule mesh:
     benchmark:
         "results/benchmarks/mesh/{symmetry}/model{model}_{level}.tsv"
     threads: 1
+    priority: level_priority
     script:
         "../scripts/build_mesh.py"
 

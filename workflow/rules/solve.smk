@@ -51,6 +51,7 @@ rule solve:
     benchmark:
         "results/benchmarks/solve/{fidelity}/{symmetry}/model{model}_{level}.tsv"
     threads: 1
+    priority: level_priority
     resources:
         tasks=1,
         mpi="mpiexec",
