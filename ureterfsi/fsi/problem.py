@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import ufl
+from dolfinx import cpp as _cpp
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
@@ -232,7 +233,7 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
-        self.A = fem_petsc.create_matrix(self.jacobian_form)
+        self.A = self._flow_matrix() if self.segregated else fem_petsc.create_matrix(self.jacobian_form)
         self.b = fem_petsc.create_vector(self.residual_form)
         if self.mesh_form is not None:
             self.Am = fem_petsc.create_matrix(self.mesh_jacobian_form)
@@ -362,6 +363,34 @@ class MonolithicFSI:
         offset = self.W.dofmap.index_map.local_range[0] * bs
         self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
         self._mesh_excluded_local = rows.astype(np.int32)
+
+    def _flow_matrix(self):
+        """Jacobian matrix of a fluid-alone Newton system with only the nonzeros its form has: every
+        (velocity, pressure) coupling of a cell and the diagonal of the mirrored mesh-displacement rows. The
+        form's sparsity would couple every dof of a cell (7x the entries on the coarse model 3); the
+        displacement rows and columns hold exact zeros there (the flow rows see the mesh displacement as a
+        coefficient), which the matrix drops on insertion (MAT_NEW_NONZERO_LOCATIONS false)."""
+        imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
+        pattern = _cpp.la.SparsityPattern(self.comm, [imap, imap], [bs, bs])
+        ncells = self.mesh.topology.index_map(self.mesh.topology.dim).size_local \
+            + self.mesh.topology.index_map(self.mesh.topology.dim).num_ghosts
+        cell_dofs = lambda f: self.W.sub(self.index[f]).dofmap.list.array.reshape(ncells, -1)  # noqa: E731
+        flow = np.hstack([cell_dofs(f) for f in self.field_names if f != "displacement"]).astype(np.int32)
+        for dofs in flow:
+            pattern.insert(dofs, dofs)
+        pattern.insert_diagonal(np.unique(cell_dofs("displacement")).astype(np.int32))
+        pattern.assemble()
+        A = _cpp.la.petsc.create_matrix(self.comm, pattern)
+        # fix the structure with zeros: the graph's owned rows, its columns in the pattern's own numbering
+        graph, owned = pattern.graph, imap.size_local * bs
+        offsets = graph.offsets[:owned + 1]
+        cols = pattern.column_index_map().local_to_global(graph.array[:offsets[-1]])
+        A.setValuesCSR(offsets.astype(PETSc.IntType), cols.astype(PETSc.IntType),
+                       np.zeros(cols.size, dtype=PETSc.ScalarType))
+        A.assemble()
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, False)
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATIONS, False)
+        return A
 
     def _field_is(self, groups: dict) -> list:
         """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
