@@ -51,3 +51,20 @@ def test_workflow_builds_one_coarse_mesh(tmp_path):
     assert (info["model"], info["level"], info["symmetry"]) == ("4", "coarse", "quarter")
     assert (tmp_path / "results/logs/mesh/quarter/model4_coarse.log").read_text().count("hole channels")
     assert (tmp_path / "results/benchmarks/mesh/quarter/model4_coarse.tsv").exists()
+
+
+def test_local_runs_get_a_memory_budget(tmp_path):
+    """A plain local `snakemake` holds the solves' mem_mb reservations against the machine's memory less
+    study.memory_headroom_mb (the workflow profile is not found with the Snakefile at the root); an explicit
+    `--resources mem_mb=...` wins."""
+    wrapper = tmp_path / "Snakefile"
+    wrapper.write_text(f'include: "{REPO / "Snakefile"}"\n'
+                       'print("BUDGET", workflow.global_resources["mem_mb"].raw, file=sys.stderr)\n')
+    with open("/proc/meminfo") as fh:
+        total_mib = next(int(line.split()[1]) for line in fh if line.startswith("MemTotal:")) // 1024
+    headroom = yaml.safe_load((REPO / "config/config.yaml").read_text())["study"]["memory_headroom_mb"]
+    for extra, expected in (((), total_mib - headroom), (("--resources", "mem_mb=9000"), 9000)):
+        run = _snakemake("-n", "--cores", "2", "-s", str(wrapper), "-d", str(REPO), *extra)
+        assert run.returncode == 0, run.stderr[-3000:]
+        budget = [line.split()[1] for line in run.stderr.splitlines() if line.startswith("BUDGET")]
+        assert budget and int(budget[0]) == expected

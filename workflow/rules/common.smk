@@ -16,6 +16,22 @@ def run_fidelity(model):
     return config["study"]["runs"].get(str(model), {}).get("fidelity", FIDELITY)
 
 
+def local_memory_budget_mb(headroom_mb):
+    """Physical memory of this machine (MemTotal of /proc/meminfo) less a headroom for the OS, MiB."""
+    with open("/proc/meminfo") as fh:
+        total_kib = next(int(line.split()[1]) for line in fh if line.startswith("MemTotal:"))
+    return total_kib // 1024 - int(headroom_mb)
+
+
+# Memory budget of local runs. Solves reserve mem_mb (study.memory_mb), but Snakemake holds reservations only
+# against a global `--resources mem_mb=...`, which the command line or a profile sets - and the workflow profile
+# under workflow/profiles/ is not searched when the Snakefile sits at the repository root. Without a budget a
+# plain `snakemake --cores 2` started the fine and medium runs side by side (15.6 + 8.8 GiB on 24 GiB). So
+# unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb.
+if workflow.local_exec and "mem_mb" not in workflow.global_resources:
+    workflow.register_resource("mem_mb", local_memory_budget_mb(config["study"]["memory_headroom_mb"]))
+
+
 def level_priority(w):
     """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
     run of the mesh study is the critical path of the default reproduction, so it starts as soon as its mesh
