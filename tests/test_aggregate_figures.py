@@ -157,6 +157,9 @@ def test_combine_models(runs, cfg, tmp_path):
     assert ds["outlet_hole_z"].sel(model="3").item() == pytest.approx(0.04875)
     assert ds.attrs["run_3_symmetry"] == "quarter" and ds.attrs["run_1_symmetry"] == "axisymmetric"
     assert "run_2_config_hash" in ds.attrs and "run_2_wall_time_s" in ds.attrs
+    scenes = json.loads(ds.attrs["scenes"])
+    assert scenes["fig04_outlet_flow"] == {k: cfg["scenes"]["fig04_outlet_flow"][k]
+                                           for k in ("quantities", "tolerance", "measured_error")}
     out = tmp_path / "models_coarse.nc"
     aggregate.write_dataset(ds, out)
     back = xr.open_dataset(out)

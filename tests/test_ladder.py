@@ -93,6 +93,36 @@ def test_ladder_dataset_table_and_figure(cfg, tmp_path):
     assert ds.attrs["reference"] == "fully_coupled" and ds.attrs["run_one_way_one_way_max_stent_displacement"] == 4e-8
     table = ladder.ladder_table(ds)
     assert "| one_way | one_way | quarter | coarse |" in table and "fig04_outlet_flow" in table
+    # the default study runs use the one_way rung; its error is checked against tolerance and the config record
+    assert ds.attrs["default_rung"] == "one_way"
+    assert float(ds["default_error"].sel(scene="fig04_outlet_flow")) == pytest.approx(0.02)
+    recorded = float(ds["recorded_error"].sel(scene="fig04_outlet_flow"))
+    assert recorded == cfg["scenes"]["fig04_outlet_flow"]["measured_error"]
+    assert "within tolerance, " + ("matches" if ladder.recorded_error_agrees(recorded, 0.02) else "differs") in table
     out = [tmp_path / "pareto.png"]
     plotting.save_figure(plotting.ladder_pareto(ds), out)
     assert out[0].stat().st_size > 1000
+
+
+def test_default_rung_and_recorded_error_checks(cfg):
+    """The rung of the default runs is found by fidelity, symmetry, level and time step; a recorded error
+    agrees with a measurement to 10 %; a default error above a tolerance is flagged in the table."""
+    assert ladder.default_rung(cfg) == "one_way"
+    cfg["time"]["dt"] = 0.02
+    assert ladder.default_rung(cfg) == "one_way_dt2"
+    cfg["study"]["fidelity"] = "fully_coupled"
+    assert ladder.default_rung(cfg) is None
+    assert ladder.recorded_error_agrees(1.9e-2, 1.92e-2) and not ladder.recorded_error_agrees(1.9e-2, 2.5e-2)
+    assert ladder.recorded_error_agrees(5.4e-5, 1.2e-4)          # absolute floor for tiny errors
+
+
+def test_exceeded_tolerance_and_stale_record_are_flagged(cfg, tmp_path):
+    cfg["ladder"]["rungs"] = {"fully_coupled": {"fidelity": "fully_coupled", "symmetry": "quarter",
+                                                "level": "coarse", "dt": 0.01},
+                              "one_way": {"fidelity": "one_way", "symmetry": "quarter", "level": "coarse", "dt": 0.01}}
+    paths = {"fully_coupled": tmp_path / "ref.nc", "one_way": tmp_path / "one.nc"}
+    synthetic_run(cfg, "3", end=1.0, wall_time=100.0).to_netcdf(paths["fully_coupled"])
+    scaled(synthetic_run(cfg, "3", end=1.0, wall_time=20.0), 0.08).to_netcdf(paths["one_way"])
+    table = ladder.ladder_table(ladder.ladder_dataset(paths, cfg))
+    row = next(line for line in table.splitlines() if line.startswith("| fig04_outlet_flow"))
+    assert "EXCEEDS tolerance, differs" in row

@@ -218,11 +218,19 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
         attrs[f"run_{m}_source"] = Path(runs[m].encoding["source"]).name
     ds.attrs.update(provenance_attrs(cfg or {}, mesh_level=levels.pop(), models=",".join(models),
                                      time_grid=time_grid, time_grid_description=grid_doc,
-                                     time_interpolation="linear"))
+                                     time_interpolation="linear", **scene_attrs(cfg)))
     ds.attrs.update(attrs)
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi study: models {', '.join(models)}, mesh {ds.attrs['mesh_level']}"
     return ds
+
+
+def scene_attrs(cfg: dict | None) -> dict:
+    """The scenes (figures) of the configuration as dataset attributes: per scene its quantities, tolerance
+    and the measured error of the rung the default runs use (config `scenes`, checked by `snakemake ladder`)."""
+    scenes = (cfg or {}).get("scenes", {})
+    return {"scenes": {name: {k: spec[k] for k in ("quantities", "tolerance", "measured_error") if k in spec}
+                       for name, spec in scenes.items()}} if scenes else {}
 
 
 def _select_probe_time(run: xr.Dataset, time: float) -> xr.DataArray:
@@ -273,7 +281,8 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
         attrs.update(_run_attrs(lv, runs[lv].attrs))
         attrs[f"run_{lv}_source"] = Path(runs[lv].encoding["source"]).name
     model = models.pop()
-    ds.attrs.update(provenance_attrs(cfg or {}, model=model, probe_time=float(time), levels=",".join(levels)))
+    ds.attrs.update(provenance_attrs(cfg or {}, model=model, probe_time=float(time), levels=",".join(levels),
+                                     **scene_attrs(cfg)))
     ds.attrs.update(attrs)
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi mesh convergence: model {model}, t = {time:g} s"

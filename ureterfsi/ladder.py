@@ -80,6 +80,22 @@ def select_rungs(error: xr.DataArray, cost: xr.DataArray, scenes: dict) -> dict:
     return out
 
 
+def default_rung(cfg: dict) -> str | None:
+    """The ladder rung that the default study runs use (study.fidelity, mesh.symmetry, study.level, time.dt),
+    or None if the ladder has no such rung."""
+    own = {"fidelity": cfg["study"]["fidelity"], "symmetry": cfg["mesh"]["symmetry"],
+           "level": cfg["study"]["level"], "dt": float(cfg["time"]["dt"])}
+    for name, r in cfg["ladder"]["rungs"].items():
+        if all((float(r[k]) if k == "dt" else r[k]) == v for k, v in own.items()):
+            return name
+    return None
+
+
+def recorded_error_agrees(recorded: float, measured: float) -> bool:
+    """A scene's recorded measured_error agrees with a new measurement to 10 % (or 1e-4 absolute)."""
+    return bool(abs(measured - recorded) <= 0.1 * abs(recorded) + 1e-4)
+
+
 def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
@@ -121,6 +137,15 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
                              {"units": "1", "long_name": "cheapest rung within the scene's tolerance"})
         ds["chosen_error"] = ("scene", [chosen[s][1] for s in sc],
                               {"units": "1", "long_name": "largest error of the chosen rung over the scene's quantities"})
+        default = default_rung(cfg)
+        if default is not None and default in names:
+            ds.attrs["default_rung"] = default
+            ds["default_error"] = ("scene", [float(ds["error"].sel(rung=default, quantity=[
+                q for q in scenes[s]["quantities"] if q in quantities]).max(skipna=True)) for s in sc],
+                {"units": "1", "long_name": f"largest error of the default runs' rung '{default}' over the "
+                                            f"scene's quantities"})
+        ds["recorded_error"] = ("scene", [float(scenes[s].get("measured_error", np.nan)) for s in sc],
+                                {"units": "1", "long_name": "the scene's measured_error recorded in the configuration"})
     ds.attrs.update(provenance_attrs(cfg, model=lad["model"], reference=lad["reference"], window_s=lad["end"]))
     for r in names:
         ds.attrs[f"run_{r}_source"] = Path(paths[r]).name
@@ -145,9 +170,20 @@ def ladder_table(ds: xr.Dataset) -> str:
                      f"{float(row['time_step']):g} | {int(row['cells'])} | {float(row['wall_time']):.1f} | "
                      f"{float(row['peak_memory']):.0f} | {errs} |")
     if "scene" in ds.coords:
-        lines += ["", "| scene | tolerance | cheapest rung within it | its error |", "|---|---|---|---|"]
+        default = ds.attrs.get("default_rung")
+        lines += ["", f"| scene | tolerance | cheapest rung within it | its error | error of the default runs' rung "
+                      f"({default or 'not in the ladder'}) | recorded in the config | check |",
+                  "|---|---|---|---|---|---|---|"]
         for s in ds["scene"].values:
             row = ds.sel(scene=s)
+            measured = float(row["default_error"]) if "default_error" in ds else float("nan")
+            recorded = float(row["recorded_error"]) if "recorded_error" in ds else float("nan")
+            checks = []
+            if np.isfinite(measured):
+                checks.append("within tolerance" if measured <= float(row["tolerance"]) else "EXCEEDS tolerance")
+                if np.isfinite(recorded):
+                    checks.append("matches" if recorded_error_agrees(recorded, measured) else "differs")
             lines.append(f"| {s} | {float(row['tolerance']):g} | {row['chosen_rung'].item()} | "
-                         f"{float(row['chosen_error']):.2e} |")
+                         f"{float(row['chosen_error']):.2e} | {measured:.2e} | {recorded:.2e} | "
+                         f"{', '.join(checks) or '-'} |")
     return "\n".join(lines) + "\n"
