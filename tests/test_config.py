@@ -73,6 +73,10 @@ BAD = [
     ("study.memory_mb.one_way.fine", 50, "study.memory_mb.one_way.fine", "must be >= 100"),
     ("study.memory_mb.one_way", {}, "study.memory_mb.one_way", "at least 1"),
     ("study.memory_mb.fully_coupled", "lots", "study.memory_mb.fully_coupled", "must be of type object"),
+    ("study.memory_mb.symmetry_factor.full", 0, "study.memory_mb.symmetry_factor.full", "must be > 0"),
+    ("study.memory_headroom_mb", -1, "study.memory_headroom_mb", "must be >= 0"),
+    ("solver.predictor", "quadratic", "solver.predictor", "must be one of linear, constant"),
+    ("scenes.fig04_outlet_flow.measured_error", -0.1, "scenes.fig04_outlet_flow.measured_error", "must be >= 0"),
     # ---- geometry
     ("geometry.ureter_wall_thickness", 0.005, "geometry.ureter_wall_thickness", "ureter outer radius"),
     ("geometry.hole_diameter", 0.0025, "geometry.hole_diameter", "stent outer diameter"),

@@ -37,6 +37,12 @@ def test_dry_run_of_default_target():
     assert int(jobs["results/meshes/quarter/model3_fine.msh"]["priority"]) == int(fine["priority"])
     mem = {k: int(dict(kv.split("=") for kv in job["resources"].split(", "))["mem_mb"])
            for k, job in (("fine", fine), ("coarse", coarse))}
+    # reservations are for quarter meshes, scaled by the symmetry's factor (the ladder's half-model rung)
+    ladder = _jobs(_snakemake("-n", "--forceall", "--cores", "2", "ladder").stdout)
+    half = ladder["results/ladder/one_way_half.nc"]
+    cfg = yaml.safe_load((REPO / "config/config.yaml").read_text())["study"]["memory_mb"]
+    assert int(dict(kv.split("=") for kv in half["resources"].split(", "))["mem_mb"]) == \
+        int(cfg["one_way"]["coarse"] * cfg["symmetry_factor"]["half"])
     profile = yaml.safe_load((REPO / "workflow/profiles/default/config.yaml").read_text())
     assert mem["fine"] + mem["coarse"] <= profile["resources"]["mem_mb"]
 

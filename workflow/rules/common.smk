@@ -42,12 +42,13 @@ def level_priority(w):
 
 def solve_mem_mb(fidelity, symmetry, level):
     """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
-    their fidelity's entry for the level (a level without one: that fidelity's largest entry)."""
+    their fidelity's entry for the level (a level without one: that fidelity's largest entry; the entries are
+    for quarter meshes) times the symmetry's factor."""
     table = config["study"]["memory_mb"]
     if symmetry == "axisymmetric":
         return int(table["axisymmetric"])
     per_level = table[fidelity]
-    return int(per_level.get(level, max(per_level.values())))
+    return int(per_level.get(level, max(per_level.values())) * table["symmetry_factor"][symmetry])
 
 
 wildcard_constraints:
