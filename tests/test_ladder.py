@@ -87,6 +87,11 @@ def test_ladder_dataset_table_and_figure(cfg, tmp_path):
     ds = ladder.ladder_dataset(paths, cfg)
     assert ds["error"].dims == ("rung", "quantity")
     assert float(ds["error"].sel(rung="one_way", quantity="outlet_flux")) == pytest.approx(0.02)
+    # every rung against every other: the reference column is `error`, the diagonal is zero
+    np.testing.assert_array_equal(ds["pairwise_error"].sel(against="fully_coupled").values, ds["error"].values)
+    assert float(ds["pairwise_error"].sel(rung="fully_coupled", against="one_way", quantity="outlet_flux")) \
+        == pytest.approx(0.02 / 1.02)
+    assert float(abs(ds["pairwise_error"].sel(rung="one_way", against="one_way")).max()) == 0.0
     assert set(ds["chosen_rung"].values) == {"one_way"}               # every scene tolerates 5 %
     for name, var in ds.variables.items():
         assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name

@@ -104,10 +104,14 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     names = list(runs)
     quantities = [q for q in QUANTITIES if q in ref]
     error = np.array([[relative_error(ref, runs[r], q) for q in quantities] for r in names])
+    pairwise = np.array([[[relative_error(runs[a], runs[r], q) for q in quantities] for a in names] for r in names])
     ds = xr.Dataset(
         {"error": (("rung", "quantity"), error,
                    {"units": "1", "long_name": f"relative max-norm error against the reference rung "
                                                f"'{lad['reference']}'"}),
+         "pairwise_error": (("rung", "against", "quantity"), pairwise,
+                            {"units": "1", "long_name": "relative max-norm error of a rung against another "
+                                                        "(e.g. the quarter model against the full one)"}),
          "wall_time": ("rung", [float(runs[r].attrs["wall_time_s"]) for r in names],
                        {"units": "s", "long_name": "wall-clock time of the run"}),
          "peak_memory": ("rung", [float(runs[r].attrs.get("peak_memory_mib", np.nan)) for r in names],
@@ -125,6 +129,7 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
          "level": ("rung", [lad["rungs"][r]["level"] for r in names],
                    {"units": "1", "long_name": "mesh level of the rung"})},
         coords={"rung": ("rung", names, {"units": "1", "long_name": "rung of the fidelity ladder"}),
+                "against": ("against", names, {"units": "1", "long_name": "rung an error is measured against"}),
                 "quantity": ("quantity", quantities, {"units": "1", "long_name": "quantity of interest"})})
     scenes = cfg.get("scenes", {})
     if scenes:
