@@ -238,6 +238,8 @@ def test_linear_predictor_saves_newton_iterations_not_accuracy():
         iterations[predictor] = pb.counters["factorisations"] + pb.counters["reused_solves"]
     assert error["linear"] <= 1.1 * error["constant"] and error["constant"] < 1e-4
     assert iterations["linear"] < iterations["constant"]
+    with pytest.raises(ValueError, match="predictor"):
+        run(2e-3, 1, "segregated", predictor="quadratic")
 
 
 _PARALLEL_DRIVER = """

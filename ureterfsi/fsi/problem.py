@@ -139,6 +139,8 @@ class MonolithicFSI:
         self.segregated = opts.mesh_motion_coupling == "segregated"
         if opts.mesh_motion_coupling not in ("monolithic", "segregated"):
             raise ValueError(f"mesh_motion_coupling 'monolithic' or 'segregated', got {opts.mesh_motion_coupling!r}")
+        if opts.predictor not in ("linear", "constant"):
+            raise ValueError(f"predictor 'linear' or 'constant', got {opts.predictor!r}")
         if self.segregated and (solid_tags or not fluid_tags):
             raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
         if opts.linear_solver == "fieldsplit" and not self.segregated:
