@@ -103,8 +103,8 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     ref = runs[lad["reference"]]
     names = list(runs)
     quantities = [q for q in QUANTITIES if q in ref]
-    error = np.array([[relative_error(ref, runs[r], q) for q in quantities] for r in names])
     pairwise = np.array([[[relative_error(runs[a], runs[r], q) for q in quantities] for a in names] for r in names])
+    error = pairwise[:, names.index(lad["reference"]), :]
     ds = xr.Dataset(
         {"error": (("rung", "quantity"), error,
                    {"units": "1", "long_name": f"relative max-norm error against the reference rung "
