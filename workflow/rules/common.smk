@@ -34,8 +34,8 @@ if workflow.local_exec and "mem_mb" not in workflow.global_resources:
 
 def level_priority(w):
     """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
-    run of the mesh study is the critical path of the default reproduction, so it starts as soon as its mesh
-    exists and the coarse runs fill the other core around it)."""
+    run of the mesh study is the critical path of the default reproduction: it starts as soon as its mesh exists
+    and the memory budget allows, and the coarse runs fill the other core around it)."""
     factors = sorted({float(v["size_factor"]) for v in config["mesh"]["levels"].values()}, reverse=True)
     return factors.index(float(config["mesh"]["levels"][w.level]["size_factor"]))
 
