@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 import ufl
 from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
@@ -272,3 +273,72 @@ def test_segregated_flow_matrix_is_the_same_in_parallel(tmp_path):
     assert results[1]["nz"] == results[2]["nz"]
     q1, q2 = np.array(results[1]["q"]), np.array(results[2]["q"])
     assert np.max(np.abs(q2 - q1)) <= 1e-10 * np.max(np.abs(q1))
+
+
+def energy_balance(steps):
+    """Contracting tube (u_r = -a (1 - cos wt) r over half a period: outflow only, so the backflow term is
+    inactive), open top at zero normal stress. Returns (int P dt, balance error): P = sum_i R_i v_i over the
+    velocity dofs from MonolithicFSI.assemble_reaction (the power of the prescribed wall motion), and the
+    error of the kinetic energy theorem int P dt = E(T) - E(0) + int D dt + int K dt, D the viscous
+    dissipation, K the kinetic-energy flux out of the top (the momentum equation is in convective ALE form)."""
+    rho, mu = 1000.0, 1e-3
+    msh, ct, ft = tube()
+
+    def contraction(rate):
+        return lambda x, t: np.vstack([-A * rate(t) * x[0], np.zeros_like(x[1])])
+
+    scene = Scene(msh, ct, ft, fluid=FluidRegion([FLUID], NewtonianFluid(rho, mu)),
+                  open_boundaries=[OpenBoundary([TOP], normal_stress=0.0, backflow=1.0)],
+                  dirichlet=[DirichletCondition("velocity", [BOTTOM]),
+                             DirichletCondition("velocity", [WALL], contraction(lambda t: OMEGA * math.sin(OMEGA * t))),
+                             DirichletCondition("velocity", [AXIS], components=[0]),
+                             DirichletCondition("displacement", [WALL, BOTTOM, TOP],
+                                                contraction(lambda t: 1 - math.cos(OMEGA * t))),
+                             DirichletCondition("displacement", [AXIS], components=[0])],
+                  axisymmetric=True)
+    pb = MonolithicFSI(scene, SolverOptions(mesh_motion_coupling="segregated"))
+    pb.solve_steady()
+    ops, parts = pb.ops, pb.split()
+    v, w = ops.vec(parts["velocity"]), ops.vec(pb.split(pb.x_dot)["displacement"])
+    F = physics.deformation_gradient(ops, parts["displacement"])
+    J = ufl.det(F)
+    grad_x_v = ops.grad(parts["velocity"]) * ufl.inv(F)
+    eps = 0.5 * (grad_x_v + grad_x_v.T)
+    n_da = J * ufl.inv(F).T * ops.normal()
+    forms = [fem.form(f * ops.weight * measure) for f, measure in (
+        (0.5 * rho * ufl.dot(v, v) * J, pb.dx(FLUID)),                              # E
+        (2 * mu * ufl.inner(eps, eps) * J, pb.dx(FLUID)),                           # D
+        (0.5 * rho * ufl.dot(v, v) * ufl.dot(v - w, n_da), pb.ds(TOP)))]            # K
+    reaction = fem_petsc.create_vector(pb.residual_form)
+    vdofs = np.asarray(pb.sub("velocity").collapse()[1])
+
+    def sample():
+        pb.assemble_reaction(reaction)
+        return [float(np.dot(reaction.array_r[vdofs], pb.x.x.array[vdofs]))] + [fem.assemble_scalar(f)
+                                                                               for f in forms]
+
+    rows = [sample()]
+    dt = math.pi / OMEGA / steps
+    for _ in range(steps):
+        pb.step(dt)
+        rows.append(sample())
+    P, E, D, K = np.array(rows).T
+
+    def integral(y):
+        return dt * (0.5 * y[0] + y[1:-1].sum() + 0.5 * y[-1])
+
+    return integral(P), (integral(P) - (E[-1] - E[0]) - integral(D) - integral(K)) / integral(np.abs(P))
+
+
+def test_reaction_power_closes_the_kinetic_energy_balance():
+    """The power of the prescribed motion from the consistent reaction (stability matrix: energy bound;
+    one-way stent load) satisfies the kinetic energy theorem, with second-order time convergence.
+    Measured: 1.6e-3, 3.5e-4 (25, 50 steps). Assembled with the history already shifted to the next
+    step (the residual as it stands after pb.step), the balance stays 4-6 % off."""
+    _, e25 = energy_balance(25)
+    power, e50 = energy_balance(50)
+    order = math.log2(abs(e25) / abs(e50))
+    print(f"kinetic energy balance: {e25:.3e} (25 steps), {e50:.3e} (50 steps), order {order:.2f}")
+    assert power > 0                        # the contracting wall pushes the urine out
+    assert abs(e25) < 3e-3 and abs(e50) < 6e-4
+    assert order > 1.7

@@ -14,6 +14,7 @@ import pytest
 import xarray as xr
 
 from ureterfsi import stability as S
+from ureterfsi.config import load_config_files, validate_config
 from ureterfsi.mesh import build_mesh
 
 
@@ -35,6 +36,16 @@ def runs(_default_cfg, rz_mesh):
     }
 
 
+@pytest.fixture(scope="module")
+def hole_run(repo_root):
+    """The 3D one-way scene on the 10 mm test segment, model 4 (one hole in the quarter), 2 elements across
+    the hole, four 10 ms steps through the load ramp (the overlay's 20 ms steps leave a 1.5 % volume
+    balance error: O(dt^2) on a 40 ms ramp)."""
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg["time"]["dt"] = 0.01
+    return S.run_case(cfg, S.Case("hole_elements", 2.0), end=0.04)
+
+
 def test_cases_follow_the_configuration(cfg):
     cases = S.cases(cfg)
     names = [c.name for c in cases]
@@ -50,6 +61,20 @@ def test_cases_follow_the_configuration(cfg):
     s = S.case_setup(cfg, S.case_by_name(cfg, "wave_speed_0.01"))   # same travel distance as the baseline
     assert s["end"] == pytest.approx(2 * cfg["stability"]["end"])
     assert S.case_setup(cfg, S.case_by_name(cfg, "mesh_level_fine"))["level"] == "fine"
+    # side holes: a 3D stented model whose hole size is the case's; n = 4 is the study's own coarse mesh
+    for n, stent_wall in ((1, 5e-4), (2, 2.5e-4), (3, 2.5e-4), (4, 2.5e-4)):
+        s = S.case_setup(cfg, S.case_by_name(cfg, f"hole_elements_{n}"))
+        assert (s["scene"], s["model"], s["symmetry"]) == ("holes", "4", "quarter")
+        sizes = s["cfg"]["mesh"]["sizes"]
+        assert sizes["hole"] == pytest.approx(cfg["geometry"]["hole_diameter"] / n)
+        assert sizes["stent_wall"] == pytest.approx(stent_wall)     # never finer than the hole
+        validate_config(s["cfg"])                                   # minima lowered with the sizes
+        assert s["parameters"]["is_baseline"] == (n == 4)
+    assert S.case_setup(cfg, S.Case("baseline"))["parameters"]["is_baseline"] == 1
+    assert math.isnan(S.case_setup(cfg, S.Case("baseline"))["parameters"]["hole_elements"])
+    cfg["stability"]["holes"]["model"] = "1"
+    with pytest.raises(ValueError, match="has no side holes"):
+        S.case_setup(cfg, S.Case("hole_elements", 2.0))
     cfg["mesh"]["levels"].pop("fine")
     with pytest.raises(ValueError, match="mesh level 'fine' is not one of mesh.levels"):
         S.case_setup(cfg, S.Case("mesh_level", "fine"))
@@ -99,6 +124,30 @@ def test_absurd_load_fails_with_a_diagnosis_naming_limit_time_and_place(runs):
     assert ds["steps"].item() >= 1 and np.isfinite(ds["kinetic_energy"].values).all()
 
 
+def test_coarse_hole_case_runs_in_3d_with_bounded_energy_and_conserved_volume(hole_run):
+    ds = hole_run
+    assert ds["outcome"].item() == "stable", ds["diagnosis"].item()
+    assert ds["scene"].item() == "holes" and ds.attrs["symmetry"] == "quarter" and ds.attrs["model"] == "4"
+    assert ds["hole_channels_found"].item() == 1 and ds["hole_elements"].item() == 2.0
+    # the mesh has the resolution the case asked for (mean hole-wall edge: 2.2 elements across, measured)
+    assert 1.6 < ds["hole_elements_measured"].item() < 3.0
+    assert ds["steps"].item() == 4 and ds["reached_time"].item() == pytest.approx(0.04)
+    assert ds["kinetic_energy_solid"].values.max() == 0.0 and ds["elastic_energy"].values.max() == 0.0
+    # the squeezed wall drives the urine (P_wall < 0: the urine at ~p_ref pushes back on the inward-moving
+    # wall, and as much p_ref work leaves through the open ends); the net work is what the urine gains in
+    # kinetic energy plus what it dissipates (kinetic energy theorem, tests/test_fluid_alone.py)
+    p_wall, p_open = ds["prescribed_power"].values, ds["open_boundary_power"].values
+    assert np.all(p_wall[1:] < 0) and np.all(p_open[1:] > 0)
+    t, e = ds["time"].values, ds["kinetic_energy"].values
+    net_work = np.sum(np.diff(t) * 0.5 * (p_wall + p_open)[1:] + np.diff(t) * 0.5 * (p_wall + p_open)[:-1])
+    print(f"net work {net_work:.3e} J, kinetic energy gained {e[-1] - e[0]:.3e} J")
+    assert 0 < e[-1] - e[0] < net_work
+    assert 0 < ds["max_energy_ratio"].item() < 1.0
+    assert ds["volume_error"].item() < 1e-2 and ds["min_jacobian"].item() > 0.9
+    for name in ds.variables:
+        assert {"units", "long_name"} <= set(ds[name].attrs), name
+
+
 def test_a_broken_case_is_recorded_not_raised(cfg, rz_mesh):
     cfg["solver"]["mesh_motion"] = "laplace"        # refused by the engine while it builds the problem
     ds = S.run_case(cfg, S.Case("baseline"), mesh_path=rz_mesh, end=0.02)
@@ -107,15 +156,16 @@ def test_a_broken_case_is_recorded_not_raised(cfg, rz_mesh):
     assert ds["steps"].item() == 0 and math.isnan(ds["max_kinetic_energy"].item())
 
 
-def test_matrix_dataset_and_stability_map(runs, tmp_path):
+def test_matrix_dataset_and_stability_map(runs, hole_run, tmp_path):
     from ureterfsi.plotting import save_figure, stability_map
 
     paths = []
-    for name, ds in runs.items():
+    for name, ds in (runs | {"hole": hole_run}).items():
         paths.append(tmp_path / f"{name}.nc")
         S.write_case(ds, paths[-1])
     m = S.combine(paths, {"stability": {}})
-    assert list(m["case"].values) == ["baseline", "time_step_0.1", "load_amplitude_2e6"]
+    assert list(m["case"].values) == ["baseline", "time_step_0.1", "load_amplitude_2e6", "hole_elements_2"]
+    assert list(m["scene"].values) == ["rz", "rz", "rz", "holes"]
     assert m["kinetic_energy"].dims == ("case", "step") and m.sizes["step"] == 21
     assert list(m["outcome"].values)[2] == "failed" and m["axis"].values[1] == "time_step"
     for name in m.variables:
@@ -125,7 +175,7 @@ def test_matrix_dataset_and_stability_map(runs, tmp_path):
     with xr.open_dataset(tmp_path / "stability.nc") as back:
         assert str(back["diagnosis"].values[2]).startswith("ale_inversion")
     table = S.outcome_table(m)
-    assert table.count("\n") == 4 and "ale_inversion" in table
+    assert table.count("\n") == 5 and "ale_inversion" in table
     png = tmp_path / "stability_map.png"
     save_figure(stability_map(m), [png], dpi=60)
     assert png.stat().st_size > 10_000

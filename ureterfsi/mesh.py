@@ -235,21 +235,37 @@ def _quality(dim: int) -> dict:
     return {"min": float(q.min()), "p01": float(np.percentile(q, 1)), "median": float(np.median(q))}
 
 
-def hole_channels(coords: np.ndarray, tris: np.ndarray) -> list:
-    """Hole channels found in a mesh: connected groups of FLUID_STENT triangles on hole walls.
-
-    A hole-wall facet has its normal across the radial direction (hole axis radial), unlike the stent's
-    lumen and outer walls. Returns the (y sign, z centre) of every channel, sorted by z then y.
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
+def _hole_wall_triangles(coords: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """FLUID_STENT triangles on hole walls: normal across the radial direction (hole axis radial), unlike
+    the stent's lumen and outer walls."""
     p = coords[tris - 1]
     n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     n /= np.linalg.norm(n, axis=1)[:, None]
     c = p.mean(axis=1)
     er = c[:, :2] / np.linalg.norm(c[:, :2], axis=1)[:, None]
-    wall = tris[np.abs((n[:, :2] * er).sum(axis=1)) < 0.7]
+    return tris[np.abs((n[:, :2] * er).sum(axis=1)) < 0.7]
+
+
+def hole_resolution(coords: np.ndarray, tris: np.ndarray, diameter: float) -> dict:
+    """Mean edge length of the hole-wall triangles and the elements across a hole it gives (diameter / it):
+    the resolution the mesh has, whatever the size fields asked for."""
+    wall = _hole_wall_triangles(coords, tris)
+    if not len(wall):
+        return {}
+    p = coords[wall - 1]
+    edges = np.linalg.norm(p - np.roll(p, 1, axis=1), axis=2)
+    h = float(edges.mean())
+    return {"hole_wall_edge_mean": h, "hole_elements_across": diameter / h}
+
+
+def hole_channels(coords: np.ndarray, tris: np.ndarray) -> list:
+    """Hole channels found in a mesh: connected groups of FLUID_STENT triangles on hole walls
+    (_hole_wall_triangles). Returns the (y sign, z centre) of every channel, sorted by z then y.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    wall = _hole_wall_triangles(coords, tris)
     if not len(wall):
         return []
     nodes, local = np.unique(wall, return_inverse=True)
@@ -312,8 +328,8 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
                         "ureter": (geom.ureter_outer_radius - geom.ureter_inner_radius) * geom.length,
                         "stent": 0.0}
         measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}
-        channels = (hole_channels(coords, _elements(2, tags.FLUID_STENT))
-                    if tags.FLUID_STENT in facets else [])
+        stent_facets = _elements(2, tags.FLUID_STENT) if tags.FLUID_STENT in facets else None
+        channels = hole_channels(coords, stent_facets) if stent_facets is not None else []
         info = {
             "model": str(model), "level": level, "symmetry": symmetry, "size_factor": f,
             "element_type": "triangle" if dim == 2 else "tetrahedron",
@@ -328,6 +344,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             "hole_pair_z": [float(z) for z in z_holes],
             "hole_channels_found": len(channels),
             "hole_channels": [{"y_sign": s, "z": z} for s, z in channels],
+            **(hole_resolution(coords, stent_facets, 2 * geom.hole_radius) if channels else {}),
             "facet_tags": {tags.FACET_NAMES[t]: int(len(_elements(dim - 1, t))) for t in sorted(facets)},
             "optimizer": optimizer,
             "mesh_wall_time_s": wall_time,

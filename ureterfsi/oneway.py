@@ -163,6 +163,22 @@ def inner_wall_motion(history: WallHistory, axisymmetric: bool):
     return (lambda x, t: field(x, t, "u")), (lambda x, t: field(x, t, "v"))
 
 
+def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
+    """(problem, fluid submesh): the urine alone on the fluid part of the mesh, ALE, the recorded
+    inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung)."""
+    import dataclasses
+
+    from .fsi.submesh import extract
+    from .scenes.ureter import ureter_fluid_scene
+    from .study import solver_options
+
+    fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
+    u_wall, v_wall = inner_wall_motion(history, axisymmetric)
+    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric)
+    options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
+    return MonolithicFSI(scene, options), fluid
+
+
 # ------------------------------------------------------------------------------------------------
 # 3. stent
 # ------------------------------------------------------------------------------------------------
@@ -231,10 +247,7 @@ class QuasiStaticStent:
         """Solve for the stent displacement under the current urine state; refresh the stress."""
         t0 = _time.perf_counter()
         r = self.residual
-        with r.localForm() as loc:
-            loc.set(0.0)
-        fem_petsc.assemble_vector(r, pb.residual_form)
-        r.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        pb.assemble_reaction(r)
         f = self.f
         with f.localForm() as loc:
             loc.set(0.0)
@@ -253,17 +266,14 @@ class QuasiStaticStent:
 def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
     """One-way solve of one model on one mesh (serial); writes the same probe dataset as the fully
     coupled run (ureterfsi.study.run), with fidelity "one_way" and the one-way diagnostics."""
-    import dataclasses
-
     from mpi4py import MPI
 
     from .fsi.submesh import extract
     from .geometry import StentModel, UreterGeometry
     from .mesh import load_mesh
     from .provenance import atomic_path
-    from .scenes.ureter import materials, ureter_fluid_scene
-    from .study import (N_LINE, UreterProbes, integrate_from_rest, probes_dataset, solver_options,
-                        time_settings)
+    from .scenes.ureter import materials
+    from .study import N_LINE, UreterProbes, integrate_from_rest, probes_dataset, time_settings
 
     wall0 = _time.perf_counter()
     comm = MPI.COMM_WORLD
@@ -274,11 +284,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
 
     axisymmetric = spec.symmetry == "axisymmetric"
     mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
-    fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
-    u_wall, v_wall = inner_wall_motion(history, axisymmetric)
-    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric)
-    options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
-    pb = MonolithicFSI(scene, options)
+    pb, fluid = fluid_problem(cfg, mesh, cell_tags, facet_tags, history, axisymmetric)
 
     g = UreterGeometry.from_config(cfg)
     model = StentModel.from_config(cfg, spec.model)

@@ -420,7 +420,7 @@ STABILITY_SHORT = {"ale_inversion": "ALE", "newton": "Newton", "nan": "NaN", "en
 # display scale of each axis's parameter: (factor, unit label)
 STABILITY_UNITS = {"time_step": (1.0, "s"), "mesh_level": (1.0, "cells"), "bulk_ratio": (1.0, ""),
                    "density_ratio": (1.0, ""), "load_amplitude": (KPA, "kPa"), "wave_speed": (MM_S, "mm/s"),
-                   "wave_width": (MM, "mm"), "viscosity": (1e3, "mPa s")}
+                   "wave_width": (MM, "mm"), "viscosity": (1e3, "mPa s"), "hole_elements": (1.0, "")}
 
 
 def stability_map(ds: xr.Dataset):
@@ -428,8 +428,9 @@ def stability_map(ds: xr.Dataset):
 
     Left: volume balance error vs the parameter (log x where the values span decades), marker = outcome
     (failed cases by the limit they hit, labelled with it and the time), colour = minimum ALE Jacobian,
-    ring = baseline, dashed line = stability.volume_tolerance. Right: kinetic energy vs time of the same
-    cases (colour = parameter, black = baseline; a cross where a failed case stopped)."""
+    ring = baseline of the row's scene (r-z: the baseline case; 3D hole rows: the case on the study's own
+    mesh), dashed line = stability.volume_tolerance. Right: kinetic energy vs time of the same cases
+    (colour = parameter, black = baseline; a cross where a failed case stopped)."""
     from .stability import AXES, AXIS_PARAMETER, format_value
 
     axes_present = [a for a in AXES if a in set(str(x) for x in ds["axis"].values)]
@@ -440,10 +441,14 @@ def stability_map(ds: xr.Dataset):
     jcmap = plt.get_cmap("RdYlGn")
     tol = float(ds.attrs.get("volume_tolerance", np.nan) or np.nan)
     axis_of = np.array([str(a) for a in ds["axis"].values])
+    scene_of = np.array([str(a) for a in ds["scene"].values]) if "scene" in ds else np.full(axis_of.size, "rz")
+    is_base = ds["is_baseline"].values.astype(bool) if "is_baseline" in ds else axis_of == "baseline"
     base = np.flatnonzero(axis_of == "baseline")
     for row, name in enumerate(axes_present):
         left, right = axs[row]
-        idx = np.concatenate([base, np.flatnonzero(axis_of == name)]).astype(int)
+        members = np.flatnonzero(axis_of == name)
+        # a row of the 3D hole scene has its own baseline among its members
+        idx = (members if (scene_of[members] != "rz").any() else np.concatenate([base, members])).astype(int)
         factor, unit = STABILITY_UNITS.get(name, (1.0, AXES[name][0]))
         x = ds[AXIS_PARAMETER[name]].values[idx].astype(float) * factor
         order = np.argsort(x, kind="stable")
@@ -460,7 +465,7 @@ def stability_map(ds: xr.Dataset):
             marker = STABILITY_MARKERS.get(key, ("*", key))[0]
             left.scatter([x[k]], [y[k]], marker=marker, s=55, c=[jcmap(jnorm(np.clip(jmin[k], 0, 1)))],
                          edgecolors="k", linewidths=0.7, zorder=3)
-            if i in base:
+            if is_base[i]:
                 left.scatter([x[k]], [y[k]], marker="o", s=170, facecolors="none", edgecolors="k",
                              linewidths=0.9, zorder=2)
             label = None
@@ -515,9 +520,9 @@ def stability_map(ds: xr.Dataset):
             ok = np.isfinite(t) & np.isfinite(e) & (e > 0)
             if not ok.any():
                 continue
-            colour = "k" if i in base else pcmap(pnorm(x[k])) if x[k] > 0 or left.get_xscale() == "linear" else "0.5"
-            right.plot(t[ok], e[ok], color=colour, lw=1.4 if i in base else 1.0,
-                       label=("baseline " if i in base else "") + (
+            colour = "k" if is_base[i] else pcmap(pnorm(x[k])) if x[k] > 0 or left.get_xscale() == "linear" else "0.5"
+            right.plot(t[ok], e[ok], color=colour, lw=1.4 if is_base[i] else 1.0,
+                       label=("baseline " if is_base[i] else "") + (
                            f"{x[k]:.0f}" if name == "mesh_level" else format_value(float(f"{x[k]:.3g}"))))
             if str(ds["outcome"].values[i]) != "stable" and str(ds["limit"].values[i]) != "volume":
                 right.plot(t[ok][-1], e[ok][-1], marker="x", color="crimson", ms=6, mew=1.5)
@@ -540,8 +545,9 @@ def stability_map(ds: xr.Dataset):
     fig.colorbar(matplotlib.cm.ScalarMappable(norm=jnorm, cmap=jcmap), ax=list(axs[:, 0]), location="left",
                  label="minimum ALE Jacobian (over the run)", shrink=0.4, pad=0.02)
     stable = int(np.sum(ds["outcome"].values.astype(str) == "stable"))
-    fig.suptitle(f"Stability matrix, stent-free model in r-z: {stable} of {ds.sizes['case']} cases stable "
-                 f"(one-at-a-time variations around the baseline)")
+    three_d = "3D one-way hole cases" if (scene_of == "holes").any() else ""
+    fig.suptitle(f"Stability matrix, stent-free model in r-z{' + ' + three_d if three_d else ''}: {stable} of "
+                 f"{ds.sizes['case']} cases stable (one-at-a-time variations around the baseline)")
     return fig
 
 

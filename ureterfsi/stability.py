@@ -1,9 +1,15 @@
 """Stability at the extremes (issue 5): a one-at-a-time parameter matrix around the baseline.
 
-The scene is the cheap fully coupled one: the stent-free model 1 in the axisymmetric r-z formulation
-(the same physics blocks as the 3D study: ALE Navier-Stokes, mixed Mooney-Rivlin wall, open ends, the
-travelling Gaussian pulse) over the whole 50 mm segment. There are no side holes in the r-z model (no
-stent): how many elements a hole needs is a 3D question this matrix does not answer.
+Two scenes:
+- **r-z, fully coupled** (every axis but hole_elements): the stent-free model 1 in the axisymmetric r-z
+  formulation (the same physics blocks as the 3D study: ALE Navier-Stokes, mixed Mooney-Rivlin wall,
+  open ends, the travelling Gaussian pulse) over the whole 50 mm segment;
+- **3D, one-way** (axis hole_elements, config `stability.holes`): how many elements a side hole needs is
+  a 3D question. A stented model on its 3D quarter mesh whose hole size is set to hole_diameter / n,
+  solved with the rung the hole figures use (ureterfsi.oneway: the urine alone on the fluid part of the
+  mesh, the r-z wall motion prescribed, the stent rigid); the quantities below are those of the urine.
+  (The fully coupled 3D model costs ~40 s per step on the coarse quarter mesh: 3 s per case would take
+  hours.) n = 4 is the coarse default, the scene's own baseline.
 
 Each case changes one quantity of the configuration's baseline (config `stability.axes`, SI units):
 
@@ -15,14 +21,20 @@ Each case changes one quantity of the configuration's baseline (config `stabilit
   wave_speed      m s-1  peristalsis.speed (the run is stretched so the pulse travels the same distance)
   wave_width      m      peristalsis.width (in peristalsis.width_measure)
   viscosity       Pa s   fluid.dynamic_viscosity
+  hole_elements   1      elements across a side-hole diameter: mesh.sizes.hole = hole_diameter / n at
+                         stability.level (3D one-way scene)
 
 and runs to `stability.end` (the paper's 3 s: the pulse centre crosses the segment and leaves it).
 
-Recorded every accepted step by `StabilityObserver` (assembled on the reference mesh with the
-axisymmetric weight 2 pi r, so every value is that of the whole 3D tube):
+Recorded every accepted step by `StabilityObserver` (assembled on the reference mesh; in r-z with the
+axisymmetric weight 2 pi r, so every value is that of the whole 3D tube; in 3D those of the symmetry
+sector the mesh holds):
   kinetic energy  E = int_fluid 1/2 rho |v|^2 J + int_solid 1/2 rho0 |v|^2;
   elastic energy  int_solid W(F) (Mooney-Rivlin W_iso + kappa/2 (J - 1)^2, >= 0);
-  external power  of the peristaltic load (int t . v) and of the open-boundary normal stress;
+  external power  of the peristaltic load (int t . v), of the open-boundary normal stress and of the
+                  prescribed (Dirichlet) motion: sum_i R_i v_i over the velocity dofs, R the residual
+                  assembled without boundary conditions (the consistent reaction: the force the wall
+                  exerts on the urine; zero for clamped ends and symmetry conditions);
   fluid volume    V = int_fluid J, the flux Q = Q_out - Q_in through the open ends and the volume
                   balance error |V(t) - V(0) + int_0^t Q| with the flux integrated by the step's own
                   BDF weights (the integration consistent with the scheme; the trapezoidal rule is not,
@@ -35,9 +47,11 @@ the place; otherwise it is "stable"):
                   place is the dof with the largest residual of the last Newton iterate;
   nan             the same with a non-finite residual, or a non-finite recorded quantity;
   ale_inversion   the minimum ALE Jacobian of the fluid mesh falls to stability.min_ale_jacobian (engine);
-                  the place is the fluid vertex with the smallest Jacobian;
-  energy          E(t) > energy_safety * (E(0) + E_el(0) + W(t)), W(t) = int_0^t |P_load| + |P_open| dt.
-                  Physically E_kin + E_el changes by the net external work minus the viscous and backflow
+                  the place is the fluid vertex with the smallest Jacobian (places are given as (r, z),
+                  r = sqrt(x^2 + y^2) in 3D);
+  energy          E(t) > energy_safety * (E(0) + E_el(0) + W(t)), W(t) = int_0^t |P_load| + |P_open|
+                  + |P_prescribed| dt. Physically E_kin + E_el changes by the net external work minus the
+                  viscous and backflow
                   dissipation, and E_el >= 0, so E(t) <= E(0) + E_el(0) + W(t); the safety factor
                   (default 10) leaves room for the discrete scheme (variable-step BDF2 is not strictly
                   energy-decreasing, the work is integrated by the rectangle rule). The place is the node
@@ -48,6 +62,7 @@ the place; otherwise it is "stable"):
 """
 from __future__ import annotations
 
+import json
 import logging
 import math
 import re
@@ -79,17 +94,23 @@ AXES = {
     "wave_speed": ("m s-1", "speed of the peristaltic pulse", "log"),
     "wave_width": ("m", "width of the peristaltic pulse", "log"),
     "viscosity": ("Pa s", "dynamic viscosity of the urine", "log"),
+    "hole_elements": ("1", "elements across a side hole (3D, one-way)", "log"),
 }
 # parameter variable of the combined dataset behind each axis
 AXIS_PARAMETER = {"time_step": "time_step", "mesh_level": "cells", "bulk_ratio": "bulk_ratio",
                   "density_ratio": "density_ratio", "load_amplitude": "peak_traction",
-                  "wave_speed": "wave_speed", "wave_width": "wave_width", "viscosity": "dynamic_viscosity"}
+                  "wave_speed": "wave_speed", "wave_width": "wave_width", "viscosity": "dynamic_viscosity",
+                  "hole_elements": "hole_elements_measured"}
 # what the rows of each field of the monolithic system are
 ROWS = {"velocity": "momentum (velocity)", "displacement": "kinematic / mesh-motion (displacement)",
         "pressure": "continuity (fluid pressure)", "solid_pressure": "volumetric constraint (solid pressure)"}
 LIMITS = ("none", "newton", "nan", "ale_inversion", "energy", "volume", "wall_time", "exception")
 DEFAULTS = {"model": "1", "level": "coarse", "end": 3.0, "energy_safety": 10.0, "volume_tolerance": 0.01,
-            "min_ale_jacobian": 0.0, "max_wall_time": 3600.0, "axes": {}}
+            "min_ale_jacobian": 0.0, "max_wall_time": 3600.0, "holes": {"model": "4", "symmetry": "quarter"},
+            "axes": {}}
+SCENES = {"rz": "r-z (axisymmetric), fully coupled monolithic ALE, P2-P2-P1-P0, BDF2",
+          "holes": "3D, one-way: r-z wall -> urine alone on the fluid submesh (ALE P2-P1, segregated mesh "
+                   "motion, BDF2), stent rigid"}
 
 
 class StabilityLimit(RuntimeError):
@@ -157,6 +178,7 @@ def case_setup(cfg: dict, case: Case) -> dict:
     st = settings(cfg)
     c = deepcopy(cfg)
     dt, level, end = float(cfg["time"]["dt"]), str(st["level"]), float(st["end"])
+    scene, model, symmetry, hole_elements = "rz", str(st["model"]), SYMMETRY, math.nan
     u, f, p = c["ureter"], c["fluid"], c["peristalsis"]
     if case.axis == "time_step":
         dt = float(case.value)
@@ -176,20 +198,48 @@ def case_setup(cfg: dict, case: Case) -> dict:
         p["width"] = float(case.value)
     elif case.axis == "viscosity":
         f["dynamic_viscosity"] = float(case.value)
+    elif case.axis == "hole_elements":
+        scene, model, symmetry = "holes", str(st["holes"]["model"]), str(st["holes"]["symmetry"])
+        hole_elements = float(case.value)
+        if level in cfg["mesh"]["levels"]:
+            f_level = float(cfg["mesh"]["levels"][level]["size_factor"])
+            sizes, g = c["mesh"]["sizes"], cfg["geometry"]
+            sizes["hole"] = g["hole_diameter"] / (hole_elements * f_level)
+            # the stent-wall size caps the hole size (min of the size fields): a hole coarser than it
+            # coarsens the stent wall too (n = 1: one element through the 0.5 mm wall)
+            sizes["stent_wall"] = max(sizes["stent_wall"], sizes["hole"])
+            # below the study's minima on purpose: the case's configuration stays consistent with its
+            # mesh.resolution_minima (ureterfsi.config.check_resolution)
+            minima = c["mesh"]["resolution_minima"]
+            minima["hole"] = min(minima["hole"], hole_elements)
+            minima["stent_wall"] = min(minima["stent_wall"],
+                                       g["stent_wall_thickness"] / (sizes["stent_wall"] * f_level))
     elif case.axis != "baseline":
         raise ValueError(f"unknown stability axis {case.axis!r}; one of baseline, {', '.join(AXES)}")
     if level not in cfg["mesh"]["levels"]:
         raise ValueError(f"stability case {case.name}: mesh level {level!r} is not one of mesh.levels "
                          f"{list(cfg['mesh']['levels'])}")
-    model = str(st["model"])
-    if cfg["models"][model]["stent"]:
+    if model not in cfg["models"]:
+        raise ValueError(f"stability case {case.name}: model {model!r} is not one of models {list(cfg['models'])}")
+    if scene == "rz" and cfg["models"][model]["stent"]:
         raise ValueError(f"stability.model {model!r} has a stent: the r-z (axisymmetric) model needs a "
                          f"stent-free model")
+    if scene == "holes" and not (cfg["models"][model]["stent"] and cfg["models"][model]["holes"]):
+        raise ValueError(f"stability.holes.model {model!r} has no side holes: the hole_elements axis needs a "
+                         f"stented model with holes")
+    if scene == "holes" and symmetry == "axisymmetric":
+        raise ValueError("stability.holes.symmetry: side holes need a 3D mesh (full, half or quarter)")
     params = {"time_step": dt, "mesh_level": level, "bulk_ratio": u["bulk_modulus"] / (u["c10"] + u["c01"]),
               "density_ratio": u["density"] / f["density"], "peak_traction": p["peak_traction"],
               "wave_speed": p["speed"], "wave_width": p["width"], "dynamic_viscosity": f["dynamic_viscosity"],
-              "end_time": end}
-    return {"cfg": c, "dt": dt, "level": level, "end": end, "model": model, "parameters": params}
+              "hole_elements": hole_elements, "end_time": end}
+    # the baseline of each scene: the r-z baseline case, and the hole case on the study's own mesh
+    default_elements = (cfg["geometry"]["hole_diameter"]
+                        / (cfg["mesh"]["sizes"]["hole"] * cfg["mesh"]["levels"][level]["size_factor"]))
+    params["is_baseline"] = int(case.axis == "baseline" or (
+        scene == "holes" and abs(hole_elements - default_elements) <= 1e-6 * default_elements))
+    return {"cfg": c, "dt": dt, "level": level, "end": end, "model": model, "scene": scene,
+            "symmetry": symmetry, "parameters": params}
 
 
 # ----------------------------------------------------------------------------------------- observer
@@ -218,6 +268,8 @@ class StabilityObserver:
         import ufl
         from dolfinx import fem
 
+        from dolfinx.fem import petsc as fem_petsc
+
         from .fsi import physics
         from .fsi.materials import LinearElastic, MooneyRivlin
 
@@ -241,7 +293,7 @@ class StabilityObserver:
             "outlet_flux": ufl.dot(rel, n_da) * w * ds(tags.OUTLET),
             "inlet_flux": -ufl.dot(rel, n_da) * w * ds(tags.INLET),
         }
-        ke_s, el = 0, 0
+        ke_s, el = 0, 0   # stay 0 (recorded as 0.0) in a fluid-alone scene
         for solid in sc.solids:
             mat, dxs = solid.material, dx(tuple(solid.tags))
             ke_s += 0.5 * mat.density * ufl.dot(V, V) * w * dxs
@@ -250,8 +302,6 @@ class StabilityObserver:
                        + 0.5 * mat.bulk_modulus * (J - 1.0) ** 2) * w * dxs
             elif isinstance(mat, LinearElastic):
                 el += 0.5 * ufl.inner(physics.elastic_first_piola(ops, mat, u), ops.grad(u)) * w * dxs
-        forms["kinetic_energy_solid"] = ke_s
-        forms["elastic_energy"] = el
         X_ref = ufl.SpatialCoordinate(pb.mesh)
         p_load = 0
         for load in sc.loads:
@@ -259,8 +309,16 @@ class StabilityObserver:
         p_open = 0
         for ob in sc.open_boundaries:
             p_open += -ob.normal_stress * ufl.dot(n_da, V) * w * ds(tuple(ob.tags))
-        forms["load_power"], forms["open_boundary_power"] = p_load, p_open
-        self.forms = {k: fem.form(f) for k, f in forms.items()}
+        forms.update(kinetic_energy_solid=ke_s, elastic_energy=el, load_power=p_load, open_boundary_power=p_open)
+        self.forms = {k: fem.form(f) for k, f in forms.items() if not isinstance(f, (int, float))}
+        self.absent = [k for k, f in forms.items() if isinstance(f, (int, float))]
+
+        # power of the prescribed motion: the consistent reaction R (residual without boundary conditions)
+        # times the velocity, over the owned velocity dofs of the mixed space
+        self._reaction = fem_petsc.create_vector(pb.residual_form)
+        vdofs = np.asarray(pb.sub("velocity").collapse()[1])
+        n_owned = pb.W.dofmap.index_map.size_local * pb.W.dofmap.index_map_bs
+        self._velocity_dofs = vdofs[vdofs < n_owned]
 
         # minimum ALE Jacobian and where (DG1 at the vertices of the fluid cells; limit 1 + du_r/dr on the axis)
         Q = fem.FunctionSpace(pb.mesh, ("DG", 1))
@@ -276,6 +334,7 @@ class StabilityObserver:
         cells = cells[cells < n_local]
         self._jac_dofs = np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[cells].ravel())
         self._jac_xyz = Q.tabulate_dof_coordinates()
+        self.axisymmetric = ops.axisymmetric
         # dof coordinates of every field of the mixed space (diagnosis of the place)
         self._fields = []
         for name in pb.field_names:
@@ -297,6 +356,20 @@ class StabilityObserver:
         """(value, xyz) of the rank holding the global minimum."""
         return min(self.comm.allgather((value, tuple(xyz))), key=lambda t: t[0])
 
+    def _rz(self, xyz):
+        """Reference (r, z) of a dof coordinate: (x, y) in r-z, (sqrt(x^2 + y^2), z) in 3D."""
+        return (xyz[0], xyz[1]) if self.axisymmetric else (math.hypot(xyz[0], xyz[1]), xyz[2])
+
+    def prescribed_power(self) -> float:
+        """sum_i R_i v_i: the power the Dirichlet conditions put into the system (see the module doc)."""
+        from mpi4py import MPI
+
+        r = self._reaction
+        self.pb.assemble_reaction(r)
+        d = self._velocity_dofs
+        local = float(np.dot(r.array_r[d], self.pb.x.x.array[d]))
+        return float(self.comm.allreduce(local, op=MPI.SUM))
+
     def min_jacobian(self):
         """(min ALE Jacobian over the fluid vertices, its reference (r, z))."""
         self._jac.interpolate(self._jac_expr)
@@ -304,7 +377,7 @@ class StabilityObserver:
         if vals.size:
             bad = ~np.isfinite(vals)
             i = int(np.argmax(bad)) if bad.any() else int(np.argmin(vals))
-            local = (float(vals[i]) if not bad.any() else -math.inf, self._jac_xyz[self._jac_dofs[i]][:2])
+            local = (float(vals[i]) if not bad.any() else -math.inf, self._rz(self._jac_xyz[self._jac_dofs[i]]))
         else:
             local = (math.inf, (math.nan, math.nan))
         return self._gather_min(*local)
@@ -317,7 +390,7 @@ class StabilityObserver:
         bad = ~np.isfinite(speed)
         i = int(np.argmax(bad)) if bad.any() else int(np.argmax(speed)) if speed.size else 0
         local = (-math.inf if bad.any() else (-float(speed[i]) if speed.size else math.inf),
-                 xyz[i][:2] if speed.size else (math.nan, math.nan))
+                 self._rz(xyz[i]) if speed.size else (math.nan, math.nan))
         val, where = self._gather_min(*local)
         return -val, where
 
@@ -335,7 +408,7 @@ class StabilityObserver:
             j = int(np.argmax(bad)) if bad.any() else int(np.argmax(vals))
             val = math.inf if bad.any() else float(vals[j])
             if val > best[0]:
-                best = (val, ROWS.get(name, name), tuple(xyz[idx[j] // bs][:2]))
+                best = (val, ROWS.get(name, name), tuple(self._rz(xyz[idx[j] // bs])))
         val, name, where = max(self.comm.allgather(best), key=lambda t: t[0])
         return name, val, where
 
@@ -344,7 +417,8 @@ class StabilityObserver:
         from mpi4py import MPI
 
         s = self.series
-        val = {k: self._assemble(k) for k in self.forms}
+        val = {k: self._assemble(k) for k in self.forms} | {k: 0.0 for k in self.absent}
+        val["prescribed_power"] = self.prescribed_power()
         dt = float(pb.dt.value) if step else 0.0
         b0, b1, b2 = (float(c.value) for c in pb.bdf) if step else (1.0, 0.0, 0.0)
         q = val["outlet_flux"] - val["inlet_flux"]
@@ -354,7 +428,8 @@ class StabilityObserver:
         else:
             vb2 = self._vb[-2] if len(self._vb) >= 2 else 0.0
             self._vb.append((-dt * q - b1 * self._vb[-1] - b2 * vb2) / b0)
-            self._work += dt * (abs(val["load_power"]) + abs(val["open_boundary_power"]))
+            self._work += dt * (abs(val["load_power"]) + abs(val["open_boundary_power"])
+                                + abs(val["prescribed_power"]))
         ke = val["kinetic_energy_fluid"] + val["kinetic_energy_solid"]
         jmin, _ = self.min_jacobian()
         umax = self.comm.allreduce(float(np.nanmax(np.abs(pb.x.x.array[self._disp_dofs]), initial=0.0)),
@@ -386,7 +461,7 @@ class StabilityObserver:
 
 
 SERIES = ("time", "dt", "kinetic_energy", "kinetic_energy_fluid", "kinetic_energy_solid", "elastic_energy",
-          "energy_bound", "load_power", "open_boundary_power", "external_work", "fluid_volume",
+          "energy_bound", "load_power", "open_boundary_power", "prescribed_power", "external_work", "fluid_volume",
           "volume_from_flux", "outlet_flux", "inlet_flux", "min_ale_jacobian", "max_displacement")
 
 # CF metadata: name -> (units, long_name)
@@ -401,7 +476,10 @@ CF = {
     "energy_bound": ("J", "E(0) + E_el(0) + W(t): the kinetic energy a dissipative system cannot exceed"),
     "load_power": ("W", "power of the peristaltic load on the wall, int t . v dA"),
     "open_boundary_power": ("W", "power of the prescribed normal stress on the open ends, -p_ref int v . n da"),
-    "external_work": ("J", "W(t) = int_0^t |load power| + |open-boundary power| dt (rectangle rule)"),
+    "prescribed_power": ("W", "power of the prescribed (Dirichlet) motion, sum_i R_i v_i over the velocity dofs "
+                         "(R: residual without boundary conditions)"),
+    "external_work": ("J", "W(t) = int_0^t |load power| + |open-boundary power| + |prescribed power| dt "
+                      "(rectangle rule)"),
     "fluid_volume": ("m3", "fluid volume V(t) = int_fluid J dX (whole tube)"),
     "volume_from_flux": ("m3", "V(0) - int_0^t (Q_out - Q_in) dt, the flux integrated with the BDF weights of each step"),
     "volume_balance_error": ("m3", "|V(t) - V(0) + int_0^t (Q_out - Q_in) dt|"),
@@ -425,8 +503,15 @@ CF = {
     "pulse_centre_at_failure": ("m", "axial position of the pulse centre at the failure time"),
     "time_step": ("s", "nominal time step"),
     "mesh_level": ("1", "mesh level (config mesh.levels)"),
-    "cells": ("1", "number of cells of the r-z mesh"),
-    "dofs": ("1", "number of unknowns of the monolithic system"),
+    "scene": ("1", "rz: r-z model, fully coupled; holes: 3D stented model, one-way (the urine alone)"),
+    "cells": ("1", "number of cells of the mesh (3D: every subdomain of the symmetry sector)"),
+    "dofs": ("1", "number of unknowns of the monolithic system (3D one-way: of the urine problem)"),
+    "hole_elements": ("1", "elements across a side-hole diameter, hole_diameter / mesh size (NaN: no holes)"),
+    "hole_elements_measured": ("1", "hole diameter / mean edge length of the hole-wall triangles of the mesh "
+                               "(NaN: no holes)"),
+    "is_baseline": ("1", "1 for the baseline of the case's scene (r-z: baseline; 3D: the study's own mesh)"),
+    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.hole_channels)"),
+    "mesh_min_quality": ("1", "smallest signed inverse condition number (gmsh minSICN) of the mesh cells"),
     "bulk_ratio": ("1", "kappa / (C10 + C01) of the ureter wall"),
     "density_ratio": ("1", "ureter wall density / urine density"),
     "peak_traction": ("Pa", "peak traction of the peristaltic pulse"),
@@ -488,18 +573,26 @@ def _place(where) -> str:
     return f"(r, z) = ({r * 1e3:.2f}, {z * 1e3:.2f}) mm"
 
 
-def _region(where, geom) -> str:
+def _region(where, geom, stented: bool = False) -> str:
     r, _ = where
     if not math.isfinite(r):
         return ""
-    return "urine" if r < geom.ureter_inner_radius * (1 - 1e-9) else "wall" if r > geom.ureter_inner_radius * (
-        1 + 1e-9) else "urine-wall interface"
+    R = geom.ureter_inner_radius
+    if r > R * (1 + 1e-9):
+        return "wall"
+    if r >= R * (1 - 1e-9):
+        return "urine-wall interface"
+    if not stented:
+        return "urine"
+    return ("urine in the stent lumen" if r < geom.stent_inner_radius else "urine in a side hole"
+            if r <= geom.stent_outer_radius else "urine in the annulus")
 
 
 def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) -> xr.Dataset:
     """Run one case of the matrix and return its dataset (dims `step` and `halving`; scalars per case).
 
-    mesh_path: the r-z mesh of the case's level (built in a temporary directory if None);
+    mesh_path: the mesh of the case (r-z at the case's level; built in a temporary directory if None, as
+    the hole_elements cases always are: their mesh sizes are the case's);
     end: override of the simulated time (short CI runs). Never raises for a failing case: the failure
     is the outcome, with its diagnosis.
     """
@@ -509,6 +602,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     from .fsi.problem import NewtonDivergence
     from .geometry import UreterGeometry
     from .mesh import build_mesh, load_mesh
+    from .oneway import fluid_problem, wall_history
     from .scenes.ureter import pulse_centre, ureter_scene
     from .study import solver_options
 
@@ -527,17 +621,27 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     failure: StabilityLimit | None = None
     engine_gave_up = False
     cells = dofs = 0
+    sidecar = {}
+    holes = setup["scene"] == "holes"
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            if mesh_path is None:
+            if mesh_path is None or holes:
                 mesh_path = Path(tmp) / "mesh.msh"
                 if comm.rank == 0:
-                    build_mesh(cfg, setup["model"], setup["level"], SYMMETRY, mesh_path, Path(tmp) / "mesh.json")
+                    build_mesh(ccfg, setup["model"], setup["level"], setup["symmetry"], mesh_path,
+                               Path(tmp) / "mesh.json")
                 comm.Barrier()
             mesh, ct, ft = load_mesh(mesh_path, comm)
+            side = Path(mesh_path).with_suffix(".json")
+            if side.exists():
+                sidecar = json.loads(side.read_text())
         cells = mesh.topology.index_map(mesh.topology.dim).size_global
-        pb = MonolithicFSI(ureter_scene(ccfg, mesh, ct, ft, axisymmetric=True, peristalsis=ccfg["peristalsis"]),
-                           solver_options(ccfg))
+        if holes:
+            history = wall_history(ccfg, params["end_time"], setup["dt"])
+            pb, _ = fluid_problem(ccfg, mesh, ct, ft, history, axisymmetric=False)
+        else:
+            pb = MonolithicFSI(ureter_scene(ccfg, mesh, ct, ft, axisymmetric=True,
+                                            peristalsis=ccfg["peristalsis"]), solver_options(ccfg))
         dofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
         obs = StabilityObserver(pb, ccfg, st, wall0)
         log.info("case %s: %d cells, %d dofs, dt %g s, end %g s", case.name, cells, dofs, setup["dt"],
@@ -602,7 +706,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     diagnosis = ""
     if failure is not None:
         where = failure.where
-        region = _region(where, geom)
+        region = _region(where, geom, stented=holes)
         diagnosis = f"{failure.limit}: {failure}"
         if math.isfinite(where[0]):
             what = failure.what or "place"
@@ -619,7 +723,12 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
         "failure_r": failure.where[0] if failure is not None else math.nan,
         "failure_z": failure.where[1] if failure is not None else math.nan,
         "pulse_centre_at_failure": zc,
+        "scene": setup["scene"],
         "time_step": params["time_step"], "mesh_level": params["mesh_level"], "cells": cells, "dofs": dofs,
+        "hole_elements": params["hole_elements"], "is_baseline": params["is_baseline"],
+        "hole_elements_measured": float(sidecar.get("hole_elements_across", math.nan)),
+        "hole_channels_found": int(sidecar.get("hole_channels_found", 0)),
+        "mesh_min_quality": float(sidecar.get("quality_minSICN", {}).get("min", math.nan)),
         "bulk_ratio": params["bulk_ratio"], "density_ratio": params["density_ratio"],
         "peak_traction": params["peak_traction"], "wave_speed": params["wave_speed"],
         "wave_width": params["wave_width"], "dynamic_viscosity": params["dynamic_viscosity"],
@@ -627,7 +736,9 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
         "reached_time": series["time"][-1] if n else math.nan,
         "steps": max(n - 1, 0),
         "max_kinetic_energy": float(np.nanmax(ke)) if n else math.nan,
-        "max_energy_ratio": float(np.nanmax(ke / np.where(bound > 0, bound, np.nan))) if n > 1 else math.nan,
+        # from the first step on (at t = 0 the bound is E(0) itself)
+        "max_energy_ratio": float(np.nanmax(ke[1:] / np.where(bound[1:] > 0, bound[1:], np.nan))) if n > 1
+        else math.nan,
         "displaced_volume": displaced,
         "volume_error": verr,
         # an inverted mesh is not an accepted state (not in the series): its Jacobian is the failure's
@@ -648,10 +759,10 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     ds = ds.assign_coords(case=case.name)
     _annotate(ds)
     ds.attrs.update(provenance_attrs(ccfg, title=f"ureterfsi stability case {case.name}", case=case.name,
-                                     model=setup["model"], symmetry=SYMMETRY, mesh_level=setup["level"],
+                                     model=setup["model"], symmetry=setup["symmetry"], mesh_level=setup["level"],
                                      energy_safety=st["energy_safety"], volume_tolerance=st["volume_tolerance"],
                                      min_ale_jacobian_limit=st["min_ale_jacobian"],
-                                     solver="monolithic ALE, P2-P2-P1-P0, BDF2, Newton + "
+                                     solver=f"{SCENES[setup['scene']]}; Newton + "
                                             f"{ccfg['solver']['linear_solver']}",
                                      processes=comm.size))
     log.info("case %s: %s %s (%.1f s)", case.name, scalars["outcome"], diagnosis, wall)
@@ -701,7 +812,8 @@ def combine(items, cfg: dict | None = None) -> xr.Dataset:
     ds = xr.Dataset(out, coords={"case": np.asarray(names, dtype=object), "step": np.arange(nstep)})
     _annotate(ds)
     ds.attrs.update(provenance_attrs(cfg or {}, title="ureterfsi stability matrix (issue 5)",
-                                     cases=",".join(names), symmetry=SYMMETRY,
+                                     cases=",".join(names),
+                                     scenes="; ".join(f"{k}: {v}" for k, v in SCENES.items()),
                                      energy_safety=runs[0].attrs.get("energy_safety", ""),
                                      volume_tolerance=runs[0].attrs.get("volume_tolerance", "")))
     for r, n in zip(runs, names):

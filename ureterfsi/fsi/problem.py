@@ -162,6 +162,7 @@ class MonolithicFSI:
         self.x = fem.Function(W, name="state")
         self.x_n = fem.Function(W)
         self.x_nm1 = fem.Function(W)
+        self._x_nm2 = np.zeros_like(self.x_nm1.x.array)   # x_nm1 of the last accepted step
         self.x_dot = fem.Function(W, name="time_derivative")   # BDF d/dt of the last accepted step
         self.t = fem.Constant(mesh, 0.0)
         self.dt = fem.Constant(mesh, 1.0)
@@ -665,6 +666,7 @@ class MonolithicFSI:
             raise
         b0, b1, b2 = (c.value for c in self.bdf)
         self.x_dot.x.array[:] = (b0 * self.x.x.array + b1 * self.x_n.x.array + b2 * self.x_nm1.x.array) / dt
+        self._x_nm2[:] = self.x_nm1.x.array     # the step's own history, for assemble_reaction
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
         self.dt_prev, self.time = dt, t_new
@@ -684,5 +686,21 @@ class MonolithicFSI:
         its, history = self.newton()
         self.x_n.x.array[:] = self.x.x.array
         self.x_nm1.x.array[:] = self.x.x.array
+        self._x_nm2[:] = self.x.x.array
         self.x_dot.x.array[:] = 0.0
         return its, history
+
+    def assemble_reaction(self, vec) -> None:
+        """Residual of the last accepted step (or steady solve) without boundary conditions, into vec
+        (ghosts summed): at a Dirichlet dof the consistent reaction, the force the constraint exerts on
+        the system; elsewhere zero to the Newton tolerance. The step's time derivative is restored for the
+        assembly (after a step x_n, x_nm1 already hold the next step's history)."""
+        shifted = self.x_n.x.array.copy(), self.x_nm1.x.array.copy()
+        self.x_n.x.array[:], self.x_nm1.x.array[:] = shifted[1], self._x_nm2
+        try:
+            with vec.localForm() as loc:
+                loc.set(0.0)
+            fem_petsc.assemble_vector(vec, self.residual_form)
+            vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        finally:
+            self.x_n.x.array[:], self.x_nm1.x.array[:] = shifted

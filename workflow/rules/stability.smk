@@ -1,7 +1,8 @@
 # Stability at the extremes (issue 5, ureterfsi.stability): one-at-a-time variations of the configuration's
-# baseline (config `stability`) on the stent-free r-z model, one job per case, then the matrix dataset and the
-# stability map. Target: `snakemake --cores 1 stability` (not part of `all`). Cheap: ~1.2k triangles, seconds
-# to minutes per case.
+# baseline (config `stability`) on the stent-free r-z model (~1.2k triangles, seconds to minutes per case) and
+# the side-hole resolution on a 3D stented model, one-way (minutes per case, the case builds its own mesh); one
+# job per case, then the matrix dataset and the stability map. Target: `snakemake --cores 2 stability` (not
+# part of `all`).
 import json
 import re
 
@@ -12,9 +13,17 @@ STABILITY_CASES = [c.name for c in stability_cases(config)] if "stability" in co
 
 
 def stability_mesh(w):
-    """The r-z mesh of the case's level (case_setup names a level missing from mesh.levels)."""
+    """The r-z mesh of the case's level (case_setup names a level missing from mesh.levels); none for a
+    hole_elements case, whose mesh sizes are its own (built in the case)."""
     s = case_setup(config, case_by_name(config, w.case))
+    if s["scene"] == "holes":
+        return []
     return f"results/meshes/axisymmetric/model{s['model']}_{s['level']}.msh"
+
+
+def stability_memory(w):
+    """MiB: r-z cases ~0.3 GiB; 3D one-way hole cases as the one-way coarse runs (3.1 GiB measured, model 4)."""
+    return 5500 if case_setup(config, case_by_name(config, w.case))["scene"] == "holes" else 3000
 
 
 def stability_inputs(w):
@@ -22,8 +31,10 @@ def stability_inputs(w):
     case = case_by_name(config, w.case)
     keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "solver")
     st = {k: v for k, v in config["stability"].items() if k != "axes"}
-    return json.dumps({k: config[k] for k in keys} | {"stability": st, "axis": case.axis, "value": case.value,
-                      "model": config["models"][str(st.get("model", "1"))]}, sort_keys=True)
+    s = case_setup(config, case)
+    mesh = {"mesh": s["cfg"]["mesh"]} if s["scene"] == "holes" else {}
+    return json.dumps({k: config[k] for k in keys} | mesh | {"stability": st, "axis": case.axis, "value": case.value,
+                      "model": config["models"][s["model"]]}, sort_keys=True)
 
 
 if STABILITY_CASES:
@@ -43,7 +54,7 @@ if STABILITY_CASES:
             case="|".join(re.escape(c) for c in STABILITY_CASES),
         threads: 1
         resources:
-            mem_mb=3000,
+            mem_mb=stability_memory,
             runtime=90,
         script:
             "../scripts/stability_case.py"

@@ -9,7 +9,8 @@ logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
 cfg = snakemake.config  # noqa: F821
 case = case_by_name(cfg, snakemake.wildcards.case)  # noqa: F821
 try:
-    ds = run_case(cfg, case, mesh_path=snakemake.input.mesh)  # noqa: F821
+    meshes = list(snakemake.input)  # noqa: F821  (none for a hole_elements case: it builds its own)
+    ds = run_case(cfg, case, mesh_path=meshes[0] if meshes else None)
     write_case(ds, snakemake.output[0])  # noqa: F821
 except Exception:
     logging.exception("stability case %s could not be recorded", case.name)
