@@ -353,18 +353,23 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         gmsh.option.setNumber("Mesh.SaveAll", 0)
         gmsh.option.setNumber("Mesh.Binary", 0)
-        with atomic_path(msh_path) as tmp:
-            part = tmp.with_name(tmp.name[:-len(".part")])  # gmsh picks the format from the extension
-            try:
-                gmsh.write(str(part))
-                part.replace(tmp)
-            finally:
-                part.unlink(missing_ok=True)
+        _write_msh(msh_path)
     finally:
         gmsh.finalize()
     info.update(provenance_attrs(cfg))
     write_json(sidecar_path, info)
     return info
+
+
+def _write_msh(path) -> None:
+    """Write the current gmsh model to `path` atomically."""
+    with atomic_path(path) as tmp:
+        part = tmp.with_name(tmp.name[:-len(".part")])  # gmsh picks the format from the extension
+        try:
+            gmsh.write(str(part))
+            part.replace(tmp)
+        finally:
+            part.unlink(missing_ok=True)
 
 
 def load_mesh(msh_path, comm):
@@ -387,3 +392,73 @@ def load_mesh(msh_path, comm):
     finally:
         if comm.rank == 0:
             gmsh.finalize()
+
+
+def mirror_mesh(src, dst, symmetry: str) -> dict:
+    """Reflect a half or quarter mesh into the full one (x = 0 mirror, then y = 0 for a quarter) and write
+    it to `dst` (.msh 4.1, the same physical groups, the mirror-plane facet groups dropped: they become
+    interior). The full mesh is the symmetric mesh's discretisation repeated, node for node, so a full-model
+    solve on it differs from the symmetric solve only by what the symmetry conditions change: nothing, in
+    exact arithmetic, for a symmetric problem. Returns {"cells", "nodes"}."""
+    planes = {"half": [(0, tags.SYMMETRY_X)], "quarter": [(0, tags.SYMMETRY_X), (1, tags.SYMMETRY_Y)]}
+    if symmetry not in planes:
+        raise ValueError(f"mirror_mesh: symmetry must be 'half' or 'quarter', got {symmetry!r}")
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.merge(str(src))
+        node_tags, xyz, _ = gmsh.model.mesh.getNodes()
+        coords = np.zeros((int(node_tags.max()), 3))
+        coords[node_tags.astype(np.int64) - 1] = xyz.reshape(-1, 3)
+        groups = {(d, t): _elements(d, t).astype(np.int64) for d, t in gmsh.model.getPhysicalGroups()}
+        names = {(d, t): gmsh.model.getPhysicalName(d, t) for d, t in groups}
+    finally:
+        gmsh.finalize()
+    dim = max(d for d, _ in groups)
+    if dim != 3:
+        raise ValueError(f"mirror_mesh: {src} is not a 3D mesh")
+    tol = 1e-9 * np.abs(coords).max()
+    for axis, plane_tag in planes[symmetry]:
+        groups.pop((dim - 1, plane_tag), None)
+        n = coords.shape[0]
+        on_plane = np.abs(coords[:, axis]) <= tol
+        image = np.where(on_plane, np.arange(n), n + np.arange(n))   # 0-based node -> its mirror image
+        mirrored = coords.copy()
+        mirrored[:, axis] *= -1.0
+        coords = np.vstack([coords, mirrored])
+        for key, conn in groups.items():
+            im = image[conn - 1] + 1
+            if key[0] == dim:
+                im[:, [0, 1]] = im[:, [1, 0]]         # a reflection flips the orientation: swap back
+            groups[key] = np.vstack([conn, im])
+    # compact node numbering 1..N (gmshio needs contiguous node tags)
+    used = np.unique(np.concatenate([c.ravel() for c in groups.values()]))
+    number = np.zeros(coords.shape[0] + 1, dtype=np.int64)
+    number[used] = np.arange(1, used.size + 1)
+    coords, groups = coords[used - 1], {k: number[c] for k, c in groups.items()}
+    used = np.arange(1, used.size + 1)
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("mirrored")
+        first = True
+        element_tag = 1
+        for (d, t), conn in sorted(groups.items(), key=lambda kv: -kv[0][0]):
+            entity = gmsh.model.addDiscreteEntity(d)
+            if first:      # every node lives on the first volume entity
+                gmsh.model.mesh.addNodes(d, entity, used, coords[used - 1].ravel())
+                first = False
+            etype = gmsh.model.mesh.getElementType("tetrahedron" if d == 3 else "triangle", 1)
+            gmsh.model.mesh.addElementsByType(entity, etype, np.arange(element_tag, element_tag + len(conn)),
+                                              conn.ravel())
+            element_tag += len(conn)
+            gmsh.model.addPhysicalGroup(d, [entity], t)
+            if names[(d, t)]:
+                gmsh.model.setPhysicalName(d, t, names[(d, t)])
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.option.setNumber("Mesh.SaveAll", 0)
+        gmsh.option.setNumber("Mesh.Binary", 0)
+        _write_msh(dst)
+    finally:
+        gmsh.finalize()
+    return {"cells": int(sum(len(c) for (d, _), c in groups.items() if d == dim)), "nodes": int(used.size)}

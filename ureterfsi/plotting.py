@@ -545,9 +545,9 @@ def stability_map(ds: xr.Dataset):
     fig.colorbar(matplotlib.cm.ScalarMappable(norm=jnorm, cmap=jcmap), ax=list(axs[:, 0]), location="left",
                  label="minimum ALE Jacobian (over the run)", shrink=0.4, pad=0.02)
     stable = int(np.sum(ds["outcome"].values.astype(str) == "stable"))
-    three_d = "3D one-way hole cases" if (scene_of == "holes").any() else ""
-    fig.suptitle(f"Stability matrix, stent-free model in r-z{' + ' + three_d if three_d else ''}: {stable} of "
-                 f"{ds.sizes['case']} cases stable (one-at-a-time variations around the baseline)")
+    scenes = "r-z, fully coupled" + ("; side holes: 3D, one-way" if (scene_of == "holes").any() else "")
+    fig.suptitle(f"Stability matrix ({scenes}): {stable} of {ds.sizes['case']} cases stable\n"
+                 f"one-at-a-time variations around the baseline")
     return fig
 
 

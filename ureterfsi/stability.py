@@ -435,7 +435,8 @@ class StabilityObserver:
         umax = self.comm.allreduce(float(np.nanmax(np.abs(pb.x.x.array[self._disp_dofs]), initial=0.0)),
                                    op=MPI.MAX)
         bound = self.initial_energy + self._work
-        row = {"time": pb.time, "dt": dt, "kinetic_energy": ke, "energy_bound": bound,
+        vmax, _ = self.fastest_node()
+        row = {"time": pb.time, "dt": dt, "kinetic_energy": ke, "energy_bound": bound, "max_speed": vmax,
                "external_work": self._work, "volume_from_flux": self._vb[-1],
                "min_ale_jacobian": jmin, "max_displacement": umax, **val}
         for k in SERIES:
@@ -462,7 +463,7 @@ class StabilityObserver:
 
 SERIES = ("time", "dt", "kinetic_energy", "kinetic_energy_fluid", "kinetic_energy_solid", "elastic_energy",
           "energy_bound", "load_power", "open_boundary_power", "prescribed_power", "external_work", "fluid_volume",
-          "volume_from_flux", "outlet_flux", "inlet_flux", "min_ale_jacobian", "max_displacement")
+          "volume_from_flux", "outlet_flux", "inlet_flux", "min_ale_jacobian", "max_displacement", "max_speed")
 
 # CF metadata: name -> (units, long_name)
 CF = {
@@ -487,6 +488,8 @@ CF = {
     "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet, positive into the ureter"),
     "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid vertices (<= 0: inverted)"),
     "max_displacement": ("m", "largest nodal displacement component over wall and ALE mesh"),
+    "max_speed": ("m s-1", "largest nodal speed |v| (a local instability shows here before it shows in the "
+                  "kinetic energy)"),
     "newton_iterations": ("1", "Newton iterations of the accepted step"),
     "step_wall_time": ("s", "wall-clock time of the accepted step (its last attempt)"),
     "halving_time": ("s", "end time of each failed step attempt (retried with dt/2, or the last of a failed step)"),
@@ -527,6 +530,7 @@ CF = {
     "volume_error": ("1", "maximum over time of the volume balance error relative to the displaced volume"),
     "min_jacobian": ("1", "minimum over time of the minimum ALE Jacobian"),
     "max_wall_displacement": ("m", "maximum over time of the maximum nodal displacement"),
+    "peak_speed": ("m s-1", "maximum over time of the largest nodal speed"),
     "total_newton_iterations": ("1", "Newton iterations of all accepted steps"),
     "mean_newton_iterations": ("1", "mean Newton iterations per accepted step"),
     "max_newton_iterations": ("1", "largest number of Newton iterations of an accepted step"),
@@ -745,6 +749,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
         "min_jacobian": _nanmin(list(series["min_ale_jacobian"]) + (
             [failure.value] if failure is not None and failure.limit == "ale_inversion" else [])),
         "max_wall_displacement": float(np.nanmax(series["max_displacement"])) if n else math.nan,
+        "peak_speed": float(np.nanmax(series["max_speed"])) if n else math.nan,
         "total_newton_iterations": int(its.sum()),
         "mean_newton_iterations": float(its[1:].mean()) if n > 1 else math.nan,
         "max_newton_iterations": int(its.max()) if n else 0,
@@ -825,14 +830,14 @@ def combine(items, cfg: dict | None = None) -> xr.Dataset:
 
 def outcome_table(ds: xr.Dataset) -> str:
     """Markdown table of the per-case outcomes of a combined dataset."""
-    lines = ["| case | outcome | max E_kin (J) | E/bound | volume error | min J_ale | halvings | "
-             "Newton/step | steps | wall (s) | diagnosis |", "|" + "---|" * 11]
+    lines = ["| case | outcome | max E_kin (J) | E/bound | volume error | min J_ale | max \\|v\\| (mm/s) | halvings | "
+             "Newton/step | steps | wall (s) | diagnosis |", "|" + "---|" * 12]
     for i, c in enumerate(ds["case"].values):
         d = ds.isel(case=i)
         lines.append(
             f"| {c} | {d['outcome'].item()} | {d['max_kinetic_energy'].item():.3g} | "
             f"{d['max_energy_ratio'].item():.2g} | {d['volume_error'].item():.2g} | "
-            f"{d['min_jacobian'].item():.3f} | {int(d['step_halvings'].item())} | "
+            f"{d['min_jacobian'].item():.3f} | {1e3 * d['peak_speed'].item():.3g} | {int(d['step_halvings'].item())} | "
             f"{d['mean_newton_iterations'].item():.1f} | {int(d['steps'].item())} | {d['wall_time'].item():.1f} | "
             f"{d['diagnosis'].item()} |")
     return "\n".join(lines)
