@@ -4,12 +4,15 @@ Builds the urine problem of a study mesh as the one-way rung does (wall motion f
 advances a few steps with the configured solver, then solves one and the same Newton system (Jacobian and
 residual at the next step) with each variant and reports the first solve (with the factorisation or the
 preconditioner set-up), a second solve with them kept, Krylov iterations, the memory MUMPS reports for its
-factorisation (INFOG(22), MB) and the process's peak memory so far. Variants: LU of the whole mixed system,
-LU of the flow block alone (the engine's direct solve), GMRES + Schur fieldsplit with ILU(0) (the engine's
+factorisation (INFOG(22), MB), the process's peak memory so far and the solution's relative difference from
+the exact flow-block LU's (when lu_flow is among the variants, run first). Variants: LU of the whole mixed system,
+LU of the flow block alone (the engine's direct solve), the same with MUMPS's block low-rank (BLR)
+compression at two dropping tolerances, GMRES + Schur fieldsplit with ILU(0) (the engine's
 `fieldsplit`) or BoomerAMG on the velocity block. The fieldsplit variants stop at the configured krylov_rtol.
 
     python benchmarks/fluid_linear_solver.py --level coarse
     python benchmarks/fluid_linear_solver.py --level medium --variants lu_flow fieldsplit_ilu
+    python benchmarks/fluid_linear_solver.py --level fine --variants lu_flow lu_flow_blr1e-8 lu_flow_blr1e-6
 """
 from __future__ import annotations
 
@@ -38,6 +41,12 @@ VARIANTS = {
     "lu_whole": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps",
                  "mat_mumps_icntl_7": 5},                              # LU of the whole mixed system (before)
     "lu_flow": flow_lu_options("mumps"),                               # the engine's direct solve
+    # MUMPS block low-rank factorisation (ICNTL(35) = 2: BLR factors, used in the solve too) with dropping
+    # tolerance CNTL(7): an approximate LU, so Newton would converge linearly at a rate ~ its error
+    "lu_flow_blr1e-8": flow_lu_options("mumps") | {"fieldsplit_flow_mat_mumps_icntl_35": 2,
+                                                  "fieldsplit_flow_mat_mumps_cntl_7": 1e-8},
+    "lu_flow_blr1e-6": flow_lu_options("mumps") | {"fieldsplit_flow_mat_mumps_icntl_35": 2,
+                                                  "fieldsplit_flow_mat_mumps_cntl_7": 1e-6},
     "fieldsplit_ilu": {},                                              # linear_solver: fieldsplit
     "fieldsplit_amg": {"fieldsplit_momentum_pc_type": "hypre",
                        "fieldsplit_momentum_pc_hypre_boomeramg_strong_threshold": 0.5},
@@ -78,8 +87,10 @@ def main():
     pb = urine_problem(cfg, args.model, args.level, args.steps)
     print(f"model {args.model}, level {args.level} (quarter): {pb.A.getSize()[0]} unknowns, "
           f"{pb.A.getInfo()['nz_used']:.3e} stored nonzeros, krylov_rtol {cfg['solver']['krylov_rtol']:.0e}")
-    print("| variant | set-up + first solve (s) | kept solve (s) | Krylov iterations | LU memory (MB) | max RSS (GiB) |")
-    print("|---|---|---|---|---|---|")
+    print("| variant | set-up + first solve (s) | kept solve (s) | Krylov iterations | LU memory (MB) | max RSS (GiB) "
+          "| difference from lu_flow |")
+    print("|---|---|---|---|---|---|---|")
+    reference = None
     flow_is = pb._field_is({"mirror": ["displacement"], "flow": ["velocity", "pressure"]})
     schur_is = pb._field_is({"momentum": ["velocity", "displacement"], "pressure": ["pressure"]})
     for name in args.variants:
@@ -93,7 +104,7 @@ def main():
         ksp.setOperators(pb.A)
         if name != "lu_whole":
             ksp.getPC().setType("fieldsplit")
-            ksp.getPC().setFieldSplitIS(*(flow_is if name == "lu_flow" else schur_is))
+            ksp.getPC().setFieldSplitIS(*(flow_is if name.startswith("lu_flow") else schur_is))
         ksp.setFromOptions()
         x = pb.b.duplicate()
         t0 = time.perf_counter()
@@ -103,11 +114,14 @@ def main():
         t2 = time.perf_counter()
         lu_mb = "-"
         if name.startswith("lu"):
-            pc = ksp.getPC().getFieldSplitSubKSP()[1].getPC() if name == "lu_flow" else ksp.getPC()
+            pc = ksp.getPC().getFieldSplitSubKSP()[1].getPC() if name.startswith("lu_flow") else ksp.getPC()
             lu_mb = pc.getFactorMatrix().getMumpsInfog(22)
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
         its = "-" if name.startswith("lu") else ksp.getIterationNumber()
-        print(f"| {name} | {t1 - t0:.2f} | {t2 - t1:.2f} | {its} | {lu_mb} | {rss:.2f} |", flush=True)
+        if name == "lu_flow":
+            reference = x.copy()
+        diff = "-" if reference is None else f"{(x - reference).norm() / reference.norm():.1e}"
+        print(f"| {name} | {t1 - t0:.2f} | {t2 - t1:.2f} | {its} | {lu_mb} | {rss:.2f} | {diff} |", flush=True)
         if ksp.getConvergedReason() < 0:
             print(f"  {name}: KSP reason {ksp.getConvergedReason()}")
         ksp.destroy()
