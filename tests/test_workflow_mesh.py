@@ -47,6 +47,25 @@ def test_dry_run_of_default_target():
     assert mem["fine"] + mem["coarse"] <= profile["resources"]["mem_mb"]
 
 
+def test_dry_run_of_stability_target():
+    """The stability target plans one job per case: r-z cases on the workflow's r-z mesh, the 3D hole cases
+    with no mesh input (each builds its own sizes) and the memory of a 3D one-way run."""
+    run = _snakemake("-n", "--forceall", "--cores", "2", "stability")
+    assert run.returncode == 0, run.stderr[-3000:]
+    jobs = _jobs(run.stdout)
+    cfg = yaml.safe_load((REPO / "config/config.yaml").read_text())["stability"]
+    holes = [f"results/stability/hole_elements_{n:g}.nc" for n in cfg["axes"]["hole_elements"]]
+    assert set(holes) <= set(jobs) and "results/stability/baseline.nc" in jobs
+    assert jobs["results/stability/baseline.nc"]["input"] == "results/meshes/axisymmetric/model1_coarse.msh"
+
+    def mem(job):
+        return int(dict(kv.split("=") for kv in job["resources"].split(", "))["mem_mb"])
+
+    for h in holes:
+        assert "input" not in jobs[h] and mem(jobs[h]) > mem(jobs["results/stability/baseline.nc"])
+    assert "results/figures/stability_map.png" in run.stdout
+
+
 def test_workflow_builds_one_coarse_mesh(tmp_path):
     target = "results/meshes/quarter/model4_coarse"
     run = _snakemake("--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
