@@ -48,6 +48,9 @@ if LADDER:
         params:
             rungs=list(LADDER_RUNGS),
             figures=FIGURE_OPTIONS,
+            # the scenes' tolerances and recorded errors: a change re-runs the check (table_ladder.md)
+            scenes=config["scenes"],
+            ladder=config["ladder"],
         log:
             "results/logs/ladder/ladder.log",
         script:
