@@ -51,11 +51,10 @@ the place; otherwise it is "stable"):
                   r = sqrt(x^2 + y^2) in 3D);
   energy          E(t) > energy_safety * (E(0) + E_el(0) + W(t)), W(t) = int_0^t |P_load| + |P_open|
                   + |P_prescribed| dt. Physically E_kin + E_el changes by the net external work minus the
-                  viscous and backflow
-                  dissipation, and E_el >= 0, so E(t) <= E(0) + E_el(0) + W(t); the safety factor
-                  (default 10) leaves room for the discrete scheme (variable-step BDF2 is not strictly
-                  energy-decreasing, the work is integrated by the rectangle rule). The place is the node
-                  of the largest velocity;
+                  viscous and backflow dissipation, and E_el >= 0, so E(t) <= E(0) + E_el(0) + W(t); the
+                  safety factor (default 10) leaves room for the discrete scheme (variable-step BDF2 is not
+                  strictly energy-decreasing, the work is integrated by the rectangle rule). The place is
+                  the node of the largest velocity;
   volume          the run ends but the volume balance error exceeds stability.volume_tolerance;
   wall_time       the case exceeds stability.max_wall_time (a budget, not a physical limit);
   exception       anything else (the message is kept): a case never crashes the matrix.
