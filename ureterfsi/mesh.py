@@ -350,9 +350,6 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             "mesh_wall_time_s": wall_time,
             "gmsh_version": gmsh.__version__,
         }
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.option.setNumber("Mesh.SaveAll", 0)
-        gmsh.option.setNumber("Mesh.Binary", 0)
         _write_msh(msh_path)
     finally:
         gmsh.finalize()
@@ -362,7 +359,10 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
 
 
 def _write_msh(path) -> None:
-    """Write the current gmsh model to `path` atomically."""
+    """Write the current gmsh model's physical groups to `path` (ASCII .msh 4.1), atomically."""
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.SaveAll", 0)
+    gmsh.option.setNumber("Mesh.Binary", 0)
     with atomic_path(path) as tmp:
         part = tmp.with_name(tmp.name[:-len(".part")])  # gmsh picks the format from the extension
         try:
@@ -455,9 +455,6 @@ def mirror_mesh(src, dst, symmetry: str) -> dict:
             gmsh.model.addPhysicalGroup(d, [entity], t)
             if names[(d, t)]:
                 gmsh.model.setPhysicalName(d, t, names[(d, t)])
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.option.setNumber("Mesh.SaveAll", 0)
-        gmsh.option.setNumber("Mesh.Binary", 0)
         _write_msh(dst)
     finally:
         gmsh.finalize()
