@@ -22,8 +22,12 @@ def stability_mesh(w):
 
 
 def stability_memory(w):
-    """MiB: r-z cases ~0.3 GiB; 3D one-way hole cases as the one-way coarse runs (3.1 GiB measured, model 4)."""
-    return 5500 if case_setup(config, case_by_name(config, w.case))["scene"] == "holes" else 3000
+    """MiB a case reserves: that of a study solve of its scene (solve_mem_mb): r-z fully coupled, or 3D one-way
+    at the case's level and symmetry."""
+    s = case_setup(config, case_by_name(config, w.case))
+    if s["scene"] == "holes":
+        return solve_mem_mb("one_way", s["symmetry"], s["level"])
+    return solve_mem_mb("fully_coupled", "axisymmetric", s["level"])
 
 
 def stability_inputs(w):
