@@ -75,7 +75,8 @@ BAD = [
     ("study.memory_mb.fully_coupled", "lots", "study.memory_mb.fully_coupled", "must be of type object"),
     ("study.memory_mb.symmetry_factor.full", 0, "study.memory_mb.symmetry_factor.full", "must be > 0"),
     ("study.memory_headroom_mb", -1, "study.memory_headroom_mb", "must be >= 0"),
-    ("solver.predictor", "quadratic", "solver.predictor", "must be one of linear, constant"),
+    ("solver.predictor", "cubic", "solver.predictor", "must be one of quadratic, linear, constant"),
+    ("solver.one_way_mesh_motion", "harmonic", "solver.one_way_mesh_motion", "must be one of algebraic, extension"),
     ("scenes.fig04_outlet_flow.measured_error", -0.1, "scenes.fig04_outlet_flow.measured_error", "must be >= 0"),
     # ---- geometry
     ("geometry.ureter_wall_thickness", 0.005, "geometry.ureter_wall_thickness", "ureter outer radius"),

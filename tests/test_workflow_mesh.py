@@ -27,7 +27,7 @@ def _jobs(stdout):
 
 def test_dry_run_of_default_target():
     """The default target plans every mesh and solve; the longest jobs (finest level) get the highest
-    priority, and the default profile's memory budget fits the fine run beside a coarse one."""
+    priority, and the default profile's memory budget fits the fine run beside the medium or a coarse one."""
     run = _snakemake("-n", "--forceall", "--cores", "2")
     assert run.returncode == 0, run.stderr[-3000:]
     assert "rule mesh:" in run.stdout
@@ -36,7 +36,7 @@ def test_dry_run_of_default_target():
     assert int(fine["priority"]) > int(medium["priority"]) > int(coarse.get("priority", 0))
     assert int(jobs["results/meshes/quarter/model3_fine.msh"]["priority"]) == int(fine["priority"])
     mem = {k: int(dict(kv.split("=") for kv in job["resources"].split(", "))["mem_mb"])
-           for k, job in (("fine", fine), ("coarse", coarse))}
+           for k, job in (("fine", fine), ("medium", medium), ("coarse", coarse))}
     # reservations are for quarter meshes, scaled by the symmetry's factor (the ladder's half-model rung)
     ladder = _jobs(_snakemake("-n", "--forceall", "--cores", "2", "ladder").stdout)
     half = ladder["results/ladder/one_way_half.nc"]
@@ -44,6 +44,9 @@ def test_dry_run_of_default_target():
     assert int(dict(kv.split("=") for kv in half["resources"].split(", "))["mem_mb"]) == \
         int(cfg["one_way"]["coarse"] * cfg["symmetry_factor"]["half"])
     profile = yaml.safe_load((REPO / "workflow/profiles/default/config.yaml").read_text())
+    # the two mesh-study runs, the longest jobs, fit side by side (else the one whose mesh is ready first
+    # starts and the other waits for it)
+    assert mem["fine"] + mem["medium"] <= profile["resources"]["mem_mb"]
     assert mem["fine"] + mem["coarse"] <= profile["resources"]["mem_mb"]
 
 

@@ -9,8 +9,8 @@ solves them in sequence, each with the engine's own physics blocks:
    at every step. Neglected: the urine pressure on the inner wall, |p - p_ref| against the 5e4 Pa load
    (measured in the fluid step and stored as `one_way_max_wall_pressure_deviation`).
 2. **urine**: the fluid alone on the fluid part of the 3D mesh, ALE, with the recorded inner-wall
-   motion prescribed (velocity and mesh displacement) and the stent held rigid; the mesh motion is
-   segregated (a linear problem factorised once).
+   motion prescribed (velocity and mesh displacement) and the stent held rigid; the mesh moves by a
+   closed-form radial blend of the wall motion (radial_blend) or by a segregated extension problem.
 3. **stent**: quasi-static linear elasticity on the stent part of the mesh, loaded by the urine's
    consistent nodal reaction forces on the fluid-stent interface (the residual of the fluid equations
    at the interface velocity dofs); stiffness matrix factorised once. Neglected: the stent deformation
@@ -163,18 +163,48 @@ def inner_wall_motion(history: WallHistory, axisymmetric: bool):
     return (lambda x, t: field(x, t, "u")), (lambda x, t: field(x, t, "v"))
 
 
+def radial_blend(history: WallHistory, r_still: float, r_wall: float, axisymmetric: bool):
+    """Algebraic ALE map of the urine domain, a callable (x, t): the inner-wall motion blended linearly in
+    radius, d(x, t) = w(r) (u_r(z, t) e_r + u_z(z, t) e_z), w = clip((r - r_still) / (r_wall - r_still), 0, 1).
+
+    r_still: the radius inside which the mesh stays still (the rigid stent's outer surface; 0 without a
+    stent, where w e_r = x / r_wall stays smooth on the axis). The stent lumen and the side holes do not
+    move, the annulus stretches uniformly in r. Exact on the wall (w = 1), on the stent (w = 0), on the
+    mirror planes (e_r lies in them) and on the clamped end faces (u = 0 there)."""
+
+    def field(x, t):
+        r = x[0] if axisymmetric else np.hypot(x[0], x[1])
+        ur, uz, _, _ = history.inner(x[1] if axisymmetric else x[2], t)
+        w = np.clip((r - r_still) / (r_wall - r_still), 0.0, 1.0)
+        if axisymmetric:
+            return np.vstack([w * ur, w * uz])
+        wr = w * ur / np.maximum(r, 1e-300)
+        return np.vstack([wr * x[0], wr * x[1], w * uz])
+
+    return field
+
+
 def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
     """(problem, fluid submesh): the urine alone on the fluid part of the mesh, ALE, the recorded
-    inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung)."""
+    inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung): the
+    radial blend (`solver.one_way_mesh_motion: algebraic`) or the extension problem (`extension`)."""
     import dataclasses
 
     from .fsi.submesh import extract
+    from .geometry import UreterGeometry
     from .scenes.ureter import ureter_fluid_scene
     from .study import solver_options
 
     fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
     u_wall, v_wall = inner_wall_motion(history, axisymmetric)
-    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric)
+    blend = None
+    if cfg["solver"]["one_way_mesh_motion"] == "algebraic":
+        g = UreterGeometry.from_config(cfg)
+        has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
+        blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.ureter_inner_radius,
+                             axisymmetric)
+    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
+                               mesh_motion=blend)
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
     return MonolithicFSI(scene, options), fluid
 
@@ -302,18 +332,20 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
     obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
                        stent=stent)
     diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)
-    integrator = integrate_from_rest(pb, settings, [obs, diag])
+    integrator = integrate_from_rest(pb, settings, [obs, diag], cfg["fluid"]["reference_pressure"])
     records = integrator.records
     wall = _time.perf_counter() - wall0
     extra = {
         "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
         "solver": (f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
-                   f"P2-P1, segregated mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
+                   f"P2-P1, {pb.mesh_motion_solver} mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
                    f"quasi-static linear stent (LU once)"),
         "timings": {k: round(v, 2) for k, v in pb.timings.items()},
         "counters": dict(pb.counters),
         "wall_solve_time_s": round(history.wall_time, 2),
+        "one_way_mesh_motion": cfg["solver"]["one_way_mesh_motion"],
+        "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
         "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
         "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
     }

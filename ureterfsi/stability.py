@@ -653,6 +653,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
             end=params["end_time"], dt=setup["dt"], max_halvings=ccfg["solver"]["max_step_halvings"],
             min_ale_jacobian=st["min_ale_jacobian"]), [obs])
         try:
+            pb.fill("pressure", ccfg["fluid"]["reference_pressure"])
             pb.solve_steady()
         except NewtonDivergence as err:
             raise SolveFailure(f"initial state (steady, fluid at rest) failed: {err}") from err

@@ -317,12 +317,16 @@ def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None) -> Time
                         checkpoint_path=checkpoint_path)
 
 
-def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers) -> TimeIntegrator:
+def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers,
+                        reference_pressure: float) -> TimeIntegrator:
     """Urine at rest at the reference pressure (steady solve, paper §2.4), then time steps to the end;
     a run with a checkpoint resumes from it instead. The integrator holds the step records; remove its
     checkpoint once the run's output is written."""
     integrator = TimeIntegrator(pb, settings, observers)
     if not integrator.has_checkpoint():
+        # Newton starts from p = p_ref: for the urine alone (walls at rest) that is the solution, so the
+        # steady solve ends after one residual (no Jacobian, no factorisation)
+        pb.fill("pressure", reference_pressure)
         its, hist = pb.solve_steady()
         log.info("initial state: urine at rest at the reference pressure, %d Newton iterations, residual %.2e",
                  its, hist[-1])
@@ -347,7 +351,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
              spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
     settings = time_settings(cfg, spec, checkpoint_path)
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
-    integrator = integrate_from_rest(pb, settings, [obs])
+    integrator = integrate_from_rest(pb, settings, [obs], cfg["fluid"]["reference_pressure"])
     records = integrator.records
     wall = _time.perf_counter() - wall0
     ds = probes_dataset(obs, records, cfg, spec, {

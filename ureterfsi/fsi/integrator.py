@@ -82,12 +82,12 @@ class TimeIntegrator:
         if not self.settings.checkpoint_path:
             return
         pb = self.problem
-        meta = {"step": step, "time": pb.time, "dt_prev": pb.dt_prev, "dt_next": dt_next,
+        meta = {"step": step, "time": pb.time, "dt_prev": pb.dt_prev, "dt_prev2": pb.dt_prev2, "dt_next": dt_next,
                 "observers": [o.state() for o in self.observers],
                 "records": [r.__dict__ for r in self.records]}
         with atomic_path(self._checkpoint_file()) as tmp:
             with open(tmp, "wb") as fh:
-                np.savez(fh, x=pb.x.x.array, x_n=pb.x_n.x.array, x_nm1=pb.x_nm1.x.array,
+                np.savez(fh, x=pb.x.x.array, x_n=pb.x_n.x.array, x_nm1=pb.x_nm1.x.array, x_nm2=pb._x_nm2,
                          cells=np.asarray(pb.mesh.topology.original_cell_index),
                          meta=np.array(json.dumps(meta)))
         log.info("checkpoint: step %d t=%.6g s -> %s", step, pb.time, self._checkpoint_file())
@@ -117,6 +117,8 @@ class TimeIntegrator:
         pb.x.x.array[:], pb.x_n.x.array[:], pb.x_nm1.x.array[:] = data["x"], data["x_n"], data["x_nm1"]
         meta = json.loads(str(data["meta"]))
         pb.time, pb.dt_prev = meta["time"], meta["dt_prev"]
+        if "x_nm2" in data:       # the quadratic predictor's third state (absent from older checkpoints)
+            pb._x_nm2[:], pb.dt_prev2 = data["x_nm2"], meta["dt_prev2"]
         pb.t.value = pb.time
         for obs, st in zip(self.observers, meta["observers"]):
             obs.load_state(st)

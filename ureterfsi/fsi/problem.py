@@ -47,7 +47,8 @@ class SolverOptions:
     newton_atol: float = 1e-10          # absolute residual norm
     newton_stol: float = 1e-11          # relative Newton increment ||dx|| / ||x||
     newton_max_iterations: int = 15
-    # Newton's initial guess: "linear" extrapolation of the last two steps or the "constant" previous state
+    # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
+    # "constant" previous state
     predictor: str = "linear"
     reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
     reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
@@ -139,10 +140,12 @@ class MonolithicFSI:
         self.segregated = opts.mesh_motion_coupling == "segregated"
         if opts.mesh_motion_coupling not in ("monolithic", "segregated"):
             raise ValueError(f"mesh_motion_coupling 'monolithic' or 'segregated', got {opts.mesh_motion_coupling!r}")
-        if opts.predictor not in ("linear", "constant"):
-            raise ValueError(f"predictor 'linear' or 'constant', got {opts.predictor!r}")
+        if opts.predictor not in ("quadratic", "linear", "constant"):
+            raise ValueError(f"predictor 'quadratic', 'linear' or 'constant', got {opts.predictor!r}")
         if self.segregated and (solid_tags or not fluid_tags):
             raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
+        if scene.mesh_motion is not None and not self.segregated:
+            raise ValueError("Scene.mesh_motion (a prescribed ALE map) needs mesh_motion_coupling 'segregated'")
         if opts.linear_solver == "fieldsplit" and not self.segregated:
             raise ValueError("linear_solver 'fieldsplit' preconditions the fluid-alone (v, p) system: it needs "
                              "mesh_motion_coupling 'segregated'; use a direct solver for coupled FSI")
@@ -169,6 +172,7 @@ class MonolithicFSI:
         self.bdf = [fem.Constant(mesh, 0.0) for _ in range(3)]   # d/dt a = (b0 a + b1 a_n + b2 a_nm1)/dt
         self.time = 0.0
         self.dt_prev = None
+        self.dt_prev2 = None       # the step before dt_prev (quadratic predictor)
 
         X, Xn, Xnm1 = self.split(self.x), self.split(self.x_n), self.split(self.x_nm1)
         tests = self.split(ufl.TestFunction(W))
@@ -238,6 +242,8 @@ class MonolithicFSI:
         # --- algebra ------------------------------------------------------------------------
         self.A = self._flow_matrix() if self.segregated else fem_petsc.create_matrix(self.jacobian_form)
         self.b = fem_petsc.create_vector(self.residual_form)
+        self._b_free = self.b.duplicate()
+        self._reaction_ready = False    # _b_free holds the residual of the last accepted state (assemble_reaction)
         if self.mesh_form is not None:
             self.Am = fem_petsc.create_matrix(self.mesh_jacobian_form)
             self.bm = fem_petsc.create_vector(self.mesh_form)
@@ -279,6 +285,13 @@ class MonolithicFSI:
         """UFL parts {field name: expression} of the current state (or of `which`, e.g. x_dot)."""
         parts = ufl.split(which or self.x)
         return {name: parts[i] for i, name in enumerate(self.field_names)}
+
+    def fill(self, name, value: float):
+        """Set every dof of one field of the current state to a constant (an initial guess: Newton then
+        applies the constraints, e.g. the pinned pressure dofs of solid cells)."""
+        _, dofs = self.sub(name).collapse()
+        self.x.x.array[np.asarray(dofs)] = value
+        self._reaction_ready = False
 
     def field(self, name, which=None):
         """Collapsed copy of a field of the current (or given) state."""
@@ -394,6 +407,10 @@ class MonolithicFSI:
         A.assemble()
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, False)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATIONS, False)
+        # the cell matrices are those of the whole mixed element, 64 x 64 on a P2-P2-P1 tetrahedron, of which the
+        # flow block is 34 x 34; PETSc skips the exact zeros before looking up their column (the search for a
+        # location the pattern does not have was most of the assembly time)
+        A.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, True)
         return A
 
     def _field_is(self, groups: dict) -> list:
@@ -447,7 +464,12 @@ class MonolithicFSI:
                                             "pressure": ["pressure"]}))
 
     def _setup_mesh_motion(self, dx_fluid):
-        """Segregated mesh motion: the linear extension problem, assembled and factorised once."""
+        """Segregated mesh motion: the scene's prescribed ALE map, or the linear extension problem,
+        assembled and factorised once."""
+        self.mesh_motion_mismatch = 0.0
+        if self.scene.mesh_motion is not None:
+            self.mesh_motion_solver = "prescribed"
+            return
         V = self.mesh_space
         a = physics.mesh_motion_residual(self.ops, self.options.mesh_motion, ufl.TrialFunction(V),
                                          ufl.TestFunction(V), self.stiffness, dx_fluid)
@@ -485,6 +507,10 @@ class MonolithicFSI:
         solve starts from the linear extrapolation u_n + (dt/dt_prev)(u_n - u_n-1) of the mirrored history in
         x_n, x_nm1 (which checkpoints hold, so a resumed run starts from the same guess)."""
         t0 = _time.perf_counter()
+        if self.mesh_motion_solver == "prescribed":
+            self._prescribed_mesh_motion()
+            self.timings["mesh_motion"] += _time.perf_counter() - t0
+            return
         if self.mesh_motion_solver == "cg_icc":
             u_n, u_nm1 = self.x_n.x.array[self._mesh_dofs], self.x_nm1.x.array[self._mesh_dofs]
             w = float(self.dt.value) / self.dt_prev if self.dt_prev else 0.0
@@ -503,6 +529,23 @@ class MonolithicFSI:
                                f"after {self._mesh_ksp.getIterationNumber()} CG iterations")
         self.mesh_displacement.x.scatter_forward()
         self.timings["mesh_motion"] += _time.perf_counter() - t0
+
+    def _prescribed_mesh_motion(self):
+        """The scene's ALE map at the current time, interpolated; the displacement Dirichlet values then set
+        on their dofs. Their largest disagreement relative to the largest displacement so far is kept in
+        `mesh_motion_mismatch` (a map that ignores the boundary motion is an error of the scene)."""
+        d, t = self.mesh_displacement, float(self.t.value)
+        d.interpolate(lambda x: self.scene.mesh_motion(x, t))
+        before = d.x.array.copy()
+        fem_petsc.set_bc(d.vector, self.mesh_bcs)
+        d.x.scatter_forward()
+        scale = self.comm.allreduce(float(np.abs(d.x.array).max(initial=0.0)), MPI.MAX)
+        if scale > 0.0:
+            gap = self.comm.allreduce(float(np.abs(d.x.array - before).max(initial=0.0)), MPI.MAX) / scale
+            self.mesh_motion_mismatch = max(self.mesh_motion_mismatch, gap)
+            if gap > 0.05:
+                raise ValueError(f"Scene.mesh_motion disagrees with the displacement Dirichlet conditions by {gap:.1%} "
+                                 f"of the largest displacement at t = {t:g} s")
 
     def _setup_ale_jacobian(self, u, fluid_tags):
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
@@ -544,6 +587,7 @@ class MonolithicFSI:
             bm.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             bm.array_w[self._mesh_excluded_local] = 0.0
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.copy(self._b_free)       # the physics residual before constraints: after a converged step, the reaction
         if self.mesh_form is not None:
             b.axpy(1.0, bm)
         fem_petsc.set_bc(b, self.bcs, self.x.vector, -1.0)
@@ -599,6 +643,7 @@ class MonolithicFSI:
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
         history = []
+        self._reaction_ready = False
         fem_petsc.set_bc(self.x.vector, self.bcs)
         self.x.x.scatter_forward()
         r0 = None
@@ -653,24 +698,43 @@ class MonolithicFSI:
         self._update_bcs(t_new)
         if self.segregated:
             self.solve_mesh_motion()
-        self.x.x.array[:] = self.x_n.x.array
-        if self.options.predictor == "linear" and self.dt_prev:
-            # x_n + (dt/dt_prev)(x_n - x_n-1): first-order extrapolation, an O(dt^2) guess instead of O(dt)
-            self.x.x.array[:] += (dt / self.dt_prev) * (self.x_n.x.array - self.x_nm1.x.array)
-        try:
-            its, history = self.newton()
-        except NewtonDivergence:
-            self.x.x.array[:] = self.x_n.x.array
-            self.t.value = self.time
-            self._jacobian_valid = False
-            raise
+        guesses = [self.options.predictor] + (["constant"] if self.options.predictor != "constant" else [])
+        for k, guess in enumerate(guesses):
+            self._predict(guess, dt)
+            try:
+                its, history = self.newton()
+                break
+            except NewtonDivergence as err:
+                self._jacobian_valid = False
+                if k + 1 < len(guesses):
+                    # an extrapolation over large or abrupt steps can overshoot: the previous state first,
+                    # before the integrator halves the step
+                    log.info("Newton failed from the %s predictor (%s); retrying from the previous state", guess, err)
+                    continue
+                self.x.x.array[:] = self.x_n.x.array
+                self.t.value = self.time
+                raise
         b0, b1, b2 = (c.value for c in self.bdf)
         self.x_dot.x.array[:] = (b0 * self.x.x.array + b1 * self.x_n.x.array + b2 * self.x_nm1.x.array) / dt
         self._x_nm2[:] = self.x_nm1.x.array     # the step's own history, for assemble_reaction
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
-        self.dt_prev, self.time = dt, t_new
+        self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
+        self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
         return its, history
+
+    def _predict(self, guess: str, dt: float):
+        """Newton's initial guess for the step to t_n + dt, into x."""
+        self.x.x.array[:] = self.x_n.x.array
+        if guess == "quadratic" and self.dt_prev and self.dt_prev2:
+            # the parabola through (t_n-2, x_n-2), (t_n-1, x_n-1), (t_n, x_n) at t_n + dt: an O(dt^3) guess
+            h1, h2 = self.dt_prev, self.dt_prev + self.dt_prev2      # t_n - t_n-1, t_n - t_n-2
+            l1 = -dt * (dt + h2) / (h1 * (h2 - h1))
+            l2 = dt * (dt + h1) / (h2 * (h2 - h1))
+            self.x.x.array[:] += l1 * (self.x_nm1.x.array - self.x_n.x.array) + l2 * (self._x_nm2 - self.x_n.x.array)
+        elif guess != "constant" and self.dt_prev:
+            # x_n + (dt/dt_prev)(x_n - x_n-1): first-order extrapolation, an O(dt^2) guess instead of O(dt)
+            self.x.x.array[:] += (dt / self.dt_prev) * (self.x_n.x.array - self.x_nm1.x.array)
 
     def solve_steady(self, t=None):
         """Steady state (d/dt switched off) at time t: e.g. fluid at rest under the reference pressure,
@@ -688,13 +752,18 @@ class MonolithicFSI:
         self.x_nm1.x.array[:] = self.x.x.array
         self._x_nm2[:] = self.x.x.array
         self.x_dot.x.array[:] = 0.0
+        self._reaction_ready = True
         return its, history
 
     def assemble_reaction(self, vec) -> None:
         """Residual of the last accepted step (or steady solve) without boundary conditions, into vec
         (ghosts summed): at a Dirichlet dof the consistent reaction, the force the constraint exerts on
         the system; elsewhere zero to the Newton tolerance. The step's time derivative is restored for the
-        assembly (after a step x_n, x_nm1 already hold the next step's history)."""
+        assembly (after a step x_n, x_nm1 already hold the next step's history). Right after a step it is
+        Newton's last residual evaluation, kept before the constraints were applied: no assembly."""
+        if self._reaction_ready:
+            self._b_free.copy(vec)
+            return
         shifted = self.x_n.x.array.copy(), self.x_nm1.x.array.copy()
         self.x_n.x.array[:], self.x_nm1.x.array[:] = shifted[1], self._x_nm2
         try:

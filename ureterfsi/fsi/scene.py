@@ -67,6 +67,11 @@ class Scene:
     dirichlet: list = field(default_factory=list)
     axisymmetric: bool = False
     name: str = "scene"
+    # Fluid-alone scenes only (segregated mesh motion): the ALE mesh displacement over the whole fluid region
+    # as a callable (x, t) -> (gdim, n), e.g. a closed-form blend of the prescribed boundary motion. None: the
+    # engine extends the boundary displacement by solving SolverOptions.mesh_motion. Where the displacement
+    # DirichletConditions apply, their values win (the engine measures the disagreement).
+    mesh_motion: Optional[Callable] = None
 
     def __post_init__(self):
         if self.fluid is None and not self.solids:
@@ -74,3 +79,6 @@ class Scene:
         for bc in self.dirichlet:
             if bc.field not in ("velocity", "displacement"):
                 raise ValueError(f"DirichletCondition.field must be 'velocity' or 'displacement', got {bc.field!r}")
+        if self.mesh_motion is not None and (self.solids or self.fluid is None):
+            raise ValueError("Scene.mesh_motion prescribes the ALE map of a fluid-alone scene; a scene with solids "
+                             "moves its fluid mesh with the solid (SolverOptions.mesh_motion)")

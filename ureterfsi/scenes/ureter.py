@@ -109,10 +109,11 @@ def ureter_scene(cfg: dict, mesh, cell_tags, facet_tags, axisymmetric: bool = Fa
 
 
 def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement, wall_velocity,
-                       axisymmetric: bool = False) -> Scene:
+                       axisymmetric: bool = False, mesh_motion=None) -> Scene:
     """The urine alone on the fluid part of a model's mesh (one-way rung, ureterfsi.oneway): the inner
     ureter wall moves as prescribed (callables of (x, t)), the stent surfaces are held still, open
-    inlet/outlet at the reference pressure (eq. 5), mesh fixed on the open faces, mirror planes / axis."""
+    inlet/outlet at the reference pressure (eq. 5), mesh fixed on the open faces, mirror planes / axis;
+    mesh_motion: the ALE map over the whole urine domain (x, t), or None for the engine's extension."""
     urine, _, _ = materials(cfg)
     dirichlet = [DirichletCondition("velocity", [tags.FLUID_URETER], wall_velocity),
                  DirichletCondition("displacement", [tags.FLUID_URETER], wall_displacement)]
@@ -130,4 +131,4 @@ def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement
     return Scene(mesh, cell_tags, facet_tags, fluid=FluidRegion([tags.FLUID], urine),
                  open_boundaries=[OpenBoundary([tags.INLET, tags.OUTLET], normal_stress=f["reference_pressure"],
                                                backflow=f["backflow_stabilisation"])],
-                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine")
+                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine", mesh_motion=mesh_motion)
