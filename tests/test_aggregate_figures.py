@@ -185,6 +185,10 @@ def test_combine_levels(level_runs, cfg, tmp_path):
     assert ds["line_max_difference_to_finest"].sel(level="fine").item() == 0.0
     # peak over [0, 1.5 s], the window every level covers: A (1 + 0.05 k) max sin t = A 1.15 sin 1.5
     assert ds["peak_outlet_flux"].sel(level="fine").item() == pytest.approx(FLUX_AMPLITUDE * 1.15 * np.sin(1.5), rel=1e-9)
+    # the outlet-most hole (z = 48.75 mm, +y): |1e-10 sin(2 pi (t - z/0.02) / 3)| peaks at t = 3 + 0.75 - 2.4375 s
+    # = 1.3125 s inside [0, 1.5 s]; |v_y| = 3e-3 (1 + 1.5) at the hole centre at 1.5 s
+    assert ds["peak_outlet_hole_flux"].sel(level="fine").item() == pytest.approx(1e-10, rel=1e-3)
+    assert ds["outlet_hole_peak_velocity"].sel(level="fine").item() == pytest.approx(3e-3 * 2.5, rel=1e-12)
     with pytest.raises(ValueError, match="no probe"):
         aggregate.combine_levels(level_runs, 0.7, cfg)
     aggregate.write_dataset(ds, tmp_path / "conv.nc")

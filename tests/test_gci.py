@@ -258,11 +258,14 @@ def test_gci_dataset_from_combine_levels(cfg, tmp_path):
         paths.append(p)
     conv = aggregate.combine_levels(paths, 1.5, cfg)
     ds = gci_dataset(conv, cfg=cfg)
-    assert list(ds["diagnosis"].values) == ["identical", "identical", "monotone", "monotone", "monotone"]
-    np.testing.assert_allclose(ds["apparent_order"][2:], 2.0, rtol=1e-6)
+    # the scalars (outlet flux, stent maximum, the outlet-most hole's flux and velocity), then the line points
+    assert list(ds["quantity"].values[:4]) == ["peak_outlet_flux", "peak_stent_max_von_mises",
+                                               "peak_outlet_hole_flux", "outlet_hole_peak_velocity"]
+    assert list(ds["diagnosis"].values) == ["identical"] * 4 + ["monotone"] * 3
+    np.testing.assert_allclose(ds["apparent_order"][4:], 2.0, rtol=1e-6)
     line_z = conv["z"].values      # the synthetic line at t = 1.5 s is VM_BASE (1 + 0.3 exp(...)) x factor
     exact = np.interp(DEFAULT_POINTS_Z, line_z, VM_BASE * (1 + 0.3 * np.exp(-0.5 * ((line_z - 0.03) / 5e-3) ** 2)))
-    np.testing.assert_allclose(ds["extrapolated_value"][2:], exact, rtol=1e-8)
+    np.testing.assert_allclose(ds["extrapolated_value"][4:], exact, rtol=1e-8)
     assert ds.attrs["model"] == "3" and "run_fine_cells" in ds.attrs
 
 

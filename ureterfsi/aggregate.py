@@ -43,6 +43,10 @@ EXTRA_CF = {
     "processes": ("1", "number of MPI processes of the run"),
     "peak_outlet_flux": ("m3 s-1", "maximum up to the comparison time of the outlet volumetric flow rate"),
     "peak_stent_max_von_mises": ("Pa", "maximum up to the comparison time of the maximum von Mises stress over the stent"),
+    "peak_outlet_hole_flux": ("m3 s-1", "maximum up to the comparison time of |volumetric flow rate| through the "
+                                        "outlet-most side hole"),
+    "outlet_hole_peak_velocity": ("m s-1", "maximum |velocity along the hole axis| across the outlet-most side hole "
+                                           "at the comparison time"),
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
 }
 
@@ -233,13 +237,13 @@ def scene_attrs(cfg: dict | None) -> dict:
                        for name, spec in scenes.items()}} if scenes else {}
 
 
-def _select_probe_time(run: xr.Dataset, time: float) -> xr.DataArray:
+def _select_probe_time(run: xr.Dataset, time: float, name: str = "stent_von_mises_line") -> xr.DataArray:
     pt = run["probe_time"].values.astype(float)
     i = int(np.argmin(np.abs(pt - time))) if pt.size else -1
     if i < 0 or abs(pt[i] - time) > 1e-6:
         raise ValueError(f"run {run.attrs.get('model')}/{run.attrs.get('mesh_level')} has no probe at t = {time} s "
                          f"(probe times {pt.tolist()})")
-    return run["stent_von_mises_line"].isel(probe_time=i)
+    return run[name].isel(probe_time=i)
 
 
 def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
@@ -263,6 +267,14 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
         series = runs[lv][name]
         return float(series.where(series["time"] <= time + 1e-9).max())
 
+    def outlet_hole(lv):
+        """(peak |flux| over [0, time], peak |v_y| across it at `time`) of the outlet-most hole (+y side)."""
+        run = runs[lv]
+        k = int(np.flatnonzero((run["hole_z"].values == run["hole_z"].values.max()) & (run["hole_side"].values > 0))[0])
+        flux = abs(run["hole_flux"].isel(hole=k))
+        return (float(flux.where(flux["time"] <= time + 1e-9).max()),
+                float(abs(_select_probe_time(run, time, "hole_velocity_y")).max()))
+
     ds = xr.Dataset(
         {"stent_von_mises_line": (("level", "z"), line),
          "cells": ("level", [attr(lv, "cells") for lv in levels]),
@@ -270,7 +282,9 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
          "processes": ("level", [attr(lv, "processes") for lv in levels]),
          "wall_time": ("level", [attr(lv, "wall_time_s") for lv in levels]),
          "peak_outlet_flux": ("level", [peak(lv, "outlet_flux") for lv in levels]),
-         "peak_stent_max_von_mises": ("level", [peak(lv, "stent_max_von_mises") for lv in levels])},
+         "peak_stent_max_von_mises": ("level", [peak(lv, "stent_max_von_mises") for lv in levels]),
+         "peak_outlet_hole_flux": ("level", [outlet_hole(lv)[0] for lv in levels]),
+         "outlet_hole_peak_velocity": ("level", [outlet_hole(lv)[1] for lv in levels])},
         coords={"level": ("level", np.array(levels, dtype=object)), "z": ("z", z)})
     ds["line_max_difference_to_finest"] = np.abs(ds["stent_von_mises_line"]
                                                  - ds["stent_von_mises_line"].isel(level=-1)).max("z")

@@ -73,7 +73,7 @@ from .provenance import atomic_path, provenance_attrs
 
 SAFETY_FACTOR = 1.25                      # Celik et al. 2008 (and Roache) for three or more grids
 DEFAULT_POINTS_Z = (0.0125, 0.025, 0.0375)   # m: probe-line points of the GCI (quarter, half, three quarters of L)
-DEFAULT_SCALARS = ("peak_outlet_flux", "peak_stent_max_von_mises")
+DEFAULT_SCALARS = ("peak_outlet_flux", "peak_stent_max_von_mises", "peak_outlet_hole_flux", "outlet_hole_peak_velocity")
 REFERENCE = ("Celik, Ghia, Roache, Freitas, Coleman & Raad 2008, Procedure for estimation and reporting of "
              "uncertainty due to discretization in CFD applications, J. Fluids Eng. 130, 078001, "
              "doi:10.1115/1.2960953")
@@ -382,9 +382,11 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
 
 
 # ---------------------------------------------------------------------------------------------- table
-_DISPLAY = {"Pa": ("kPa", 1e-3), "m3 s-1": ("mm³/s", 1e9), "m": ("mm", 1e3)}
+_DISPLAY = {"Pa": ("kPa", 1e-3), "m3 s-1": ("mm³/s", 1e9), "m": ("mm", 1e3), "m s-1": ("mm/s", 1e3)}
 _LABELS = {"peak_outlet_flux": "peak outlet flow rate",
-           "peak_stent_max_von_mises": "peak maximum stent von Mises stress"}
+           "peak_stent_max_von_mises": "peak maximum stent von Mises stress",
+           "peak_outlet_hole_flux": "peak flow rate through the outlet-most hole",
+           "outlet_hole_peak_velocity": "peak hole-axis velocity across the outlet-most hole"}
 
 
 def _g(x, digits=4) -> str:

@@ -122,7 +122,8 @@ def wall_history(cfg: dict, end: float, dt: float, nr: int = 4) -> WallHistory:
     t0 = _time.perf_counter()
     model = WallModel(cfg, nr=nr, travelling=True,
                       options=SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25,
-                                            reuse_jacobian=True, reuse_contraction=0.3))
+                                            reuse_jacobian=True, reuse_contraction=0.3,
+                                            predictor=cfg["solver"]["predictor"]))
     rec = _SurfaceRecorder(model)
     TimeIntegrator(model.problem, TimeSettings(end=end, dt=dt, output_times=cfg["time"]["probe_times"],
                                                max_halvings=cfg["solver"]["max_step_halvings"]),
