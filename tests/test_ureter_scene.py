@@ -4,6 +4,7 @@ CI variant: model 3 on a 10 mm segment (tests/data/mini-ureter.yaml; same cross-
 load, mesh sizes and quarter symmetry as the study) for 4 steps of 20 ms. The slow variant runs the
 study's own model 3, coarse quarter mesh (638 519 unknowns, ~11 GB for the factorisation).
 """
+import json
 import shutil
 
 import numpy as np
@@ -127,6 +128,36 @@ def test_algebraic_mesh_motion_follows_the_extension(mini_dir, repo_root, mini_o
     assert max(errors.values()) < 1e-2, errors
     assert 0 < max(errors.values())                         # a different mesh motion, not the same run twice
     assert np.all(alg["min_ale_jacobian"].values > 0.5)
+
+
+def test_shared_wall_motion_is_the_runs_own(mini_dir, repo_root, mini_one_way):
+    """Step 1 of the rung as a job of its own (rule wall_motion): the one-way run reading it equals the run that
+    solves its own wall, bit for bit; a file from another wall configuration or time step is refused."""
+    import xarray as xr
+
+    cfg, own = mini_one_way
+    path = mini_dir / "wall_motion.nc"
+    oneway.write_wall_motion(cfg, str(path))
+    with xr.open_dataset(path) as wds:
+        assert wds["inner_radial_displacement"].attrs["units"] == "m" and "wall_config_hash" in wds.attrs
+        wall = wds.load()
+    end, dt = cfg["time"]["end"], cfg["time"]["dt"]
+    h = oneway.WallHistory.from_dataset(wall, cfg, end, dt)
+    assert h.inner_ur.shape == (round(end / dt) + 1, h.z_inner.size)
+    _, shared = _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"],
+                     solve=lambda c, spec, out: oneway.run(c, spec, out.replace(".nc", "_shared.nc"), wall_path=str(path)))
+    assert shared.attrs["wall_motion_file"] == str(path) and own.attrs["wall_motion_file"] == ""
+    for name, var in own.data_vars.items():
+        if name != "step_wall_time":
+            np.testing.assert_array_equal(shared[name].values, var.values, err_msg=name)
+    other = json.loads(json.dumps(cfg))
+    other["peristalsis"]["peak_traction"] *= 2
+    with pytest.raises(ValueError, match="another configuration"):
+        oneway.WallHistory.from_dataset(wall, other, end, dt)
+    with pytest.raises(ValueError, match="in steps of"):
+        oneway.WallHistory.from_dataset(wall, cfg, end, dt / 2)
+    with pytest.raises(ValueError, match="needs \\[0, "):
+        oneway.WallHistory.from_dataset(wall, cfg, 2 * end, dt)
 
 
 def test_sub_domains_keep_their_tags(mini, mini_dir):

@@ -35,6 +35,12 @@ def test_dry_run_of_default_target():
     fine, medium, coarse = (jobs[f"results/runs/one_way/quarter/model3_{lv}.nc"] for lv in ("fine", "medium", "coarse"))
     assert int(fine["priority"]) > int(medium["priority"]) > int(coarse.get("priority", 0))
     assert int(jobs["results/meshes/quarter/model3_fine.msh"]["priority"]) == int(fine["priority"])
+    # the r-z wall is solved once, first, for every one-way run (not by each run)
+    wall = jobs["results/runs/one_way/wall_motion.nc"]
+    assert int(wall["priority"]) > int(fine["priority"])
+    for job in (fine, medium, coarse):
+        assert "results/runs/one_way/wall_motion.nc" in job["input"]
+    assert "wall_motion" not in jobs["results/runs/fully_coupled/axisymmetric/model1_coarse.nc"]["input"]
     mem = {k: int(dict(kv.split("=") for kv in job["resources"].split(", "))["mem_mb"])
            for k, job in (("fine", fine), ("medium", medium), ("coarse", coarse))}
     # reservations are for quarter meshes, scaled by the symmetry's factor (the ladder's half-model rung)

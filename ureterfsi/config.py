@@ -442,6 +442,13 @@ def validate_config(cfg: dict) -> None:
         check(cfg)
 
 
+def wall_sections(cfg: dict) -> dict:
+    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.oneway.wall_history): a change
+    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
+    return {k: cfg[k] for k in ("geometry", "ureter", "peristalsis", "time")} | {
+        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}
+
+
 def deep_merge(base: dict, overrides: dict) -> dict:
     """Return `base` updated recursively by `overrides` (nested dicts merged, other values replaced)."""
     out = copy.deepcopy(base)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import ufl
+import xarray as xr
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
@@ -37,6 +38,8 @@ from .fsi.problem import MonolithicFSI, dirichlet_bcs
 from .fsi.scene import DirichletCondition
 from .fsi.submesh import SubDomain
 from .probes import CellField, PointProbe, von_mises
+from .config import wall_sections
+from .provenance import config_hash
 
 log = logging.getLogger("ureterfsi.oneway")
 
@@ -72,6 +75,48 @@ class WallHistory:
 
     def outer_radial(self, z, t):
         return self._at(self.outer_ur, self.z_outer, z, t)
+
+    def to_dataset(self, cfg: dict) -> xr.Dataset:
+        """CF-annotated dataset of the recorded motion, with provenance and the hash of the configuration
+        sections the wall solve reads (`wall_config_hash`, checked by from_dataset)."""
+        from .provenance import provenance_attrs
+
+        def var(dims, data, units, long_name):
+            return (dims, np.asarray(data), {"units": units, "long_name": long_name})
+
+        ds = xr.Dataset(
+            {"inner_radial_displacement": var(("time", "z_inner"), self.inner_ur, "m", "radial displacement of the inner wall surface"),
+             "inner_axial_displacement": var(("time", "z_inner"), self.inner_uz, "m", "axial displacement of the inner wall surface"),
+             "inner_radial_velocity": var(("time", "z_inner"), self.inner_vr, "m s-1", "radial velocity of the inner wall surface"),
+             "inner_axial_velocity": var(("time", "z_inner"), self.inner_vz, "m s-1", "axial velocity of the inner wall surface"),
+             "outer_radial_displacement": var(("time", "z_outer"), self.outer_ur, "m", "radial displacement of the outer wall surface")},
+            coords={"time": ("time", self.time, {"units": "s", "long_name": "time"}),
+                    "z_inner": ("z_inner", self.z_inner, {"units": "m", "long_name": "axial position on the inner wall surface (reference)"}),
+                    "z_outer": ("z_outer", self.z_outer, {"units": "m", "long_name": "axial position on the outer wall surface (reference)"})})
+        ds.attrs.update(provenance_attrs(cfg, model="wall", fidelity="one_way", wall_solve_time_s=round(self.wall_time, 2),
+                                         wall_config_hash=config_hash(wall_sections(cfg))))
+        ds.attrs["Conventions"] = "CF-1.8"
+        ds.attrs["title"] = "ureterfsi one-way rung, step 1: the ureter wall alone (r-z), surface motion"
+        return ds
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset, cfg: dict, end: float, dt: float) -> "WallHistory":
+        """The recorded motion of a wall_motion dataset, refused unless it was computed from the same wall
+        configuration with the same time step and reaches `end`."""
+        want = config_hash(wall_sections(cfg))
+        if ds.attrs.get("wall_config_hash") != want:
+            raise ValueError(f"wall motion {ds.encoding.get('source', '')} was computed from another configuration "
+                             f"(wall_config_hash {ds.attrs.get('wall_config_hash')} != {want})")
+        t = ds["time"].values
+        steps = np.diff(t)
+        if not np.allclose(steps, dt, rtol=1e-9, atol=0) or t[-1] < end - 1e-9 * max(dt, end):
+            raise ValueError(f"wall motion {ds.encoding.get('source', '')} covers [0, {t[-1]:g}] s in steps "
+                             f"{steps.min():g}-{steps.max():g} s; this run needs [0, {end:g}] s in steps of {dt:g} s")
+        return cls(t, ds["z_inner"].values, ds["inner_radial_displacement"].values,
+                   ds["inner_axial_displacement"].values, ds["inner_radial_velocity"].values,
+                   ds["inner_axial_velocity"].values, ds["z_outer"].values, ds["outer_radial_displacement"].values,
+                   float(ds.attrs.get("wall_solve_time_s", 0.0)))
+
 
 
 class _SurfaceRecorder(Observer):
@@ -294,9 +339,22 @@ class QuasiStaticStent:
 # ------------------------------------------------------------------------------------------------
 # the run
 # ------------------------------------------------------------------------------------------------
-def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
+def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
+    """Step 1 of the rung as a job of its own: the wall over [0, time.end] in steps of time.dt, written
+    atomically. Every one-way run of the study reads it (their wall is the same: geometry and load do not
+    depend on the stent model or the 3D mesh)."""
+    from .provenance import atomic_path
+
+    ds = wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"]).to_dataset(cfg)
+    with atomic_path(out_path) as tmp:
+        ds.to_netcdf(tmp)
+    return ds
+
+
+def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall_path: str | None = None):
     """One-way solve of one model on one mesh (serial); writes the same probe dataset as the fully
-    coupled run (ureterfsi.study.run), with fidelity "one_way" and the one-way diagnostics."""
+    coupled run (ureterfsi.study.run), with fidelity "one_way" and the one-way diagnostics. wall_path: a
+    wall_motion dataset (write_wall_motion) to read instead of solving the wall."""
     from mpi4py import MPI
 
     from .fsi.submesh import extract
@@ -311,7 +369,13 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
     if comm.size > 1:
         raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
     settings = time_settings(cfg, spec, checkpoint_path)
-    history = wall_history(cfg, settings.end, settings.dt)
+    if wall_path:
+        with xr.open_dataset(wall_path) as wds:
+            history = WallHistory.from_dataset(wds.load(), cfg, settings.end, settings.dt)
+        log.info("wall (r-z) motion read from %s (%d steps, solved in %.1f s)", wall_path, len(history.time) - 1,
+                 history.wall_time)
+    else:
+        history = wall_history(cfg, settings.end, settings.dt)
 
     axisymmetric = spec.symmetry == "axisymmetric"
     mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
@@ -344,7 +408,9 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None):
                    f"quasi-static linear stent (LU once)"),
         "timings": {k: round(v, 2) for k, v in pb.timings.items()},
         "counters": dict(pb.counters),
+        # the wall's solve time, in this run or in the shared wall_motion job (wall_motion_file)
         "wall_solve_time_s": round(history.wall_time, 2),
+        "wall_motion_file": str(wall_path or ""),
         "one_way_mesh_motion": cfg["solver"]["one_way_mesh_motion"],
         "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
         "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,

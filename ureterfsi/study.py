@@ -402,6 +402,8 @@ def main(argv=None) -> int:
     ap.add_argument("--checkpoint", default=None, help="checkpoint path (resumes if present)")
     ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
     ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
+    ap.add_argument("--wall", default=None,
+                    help="one_way: the wall_motion dataset to read (python -m ureterfsi.oneway) instead of solving the wall")
     ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
                     help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, ureterfsi.oneway)")
     args = ap.parse_args(argv)
@@ -419,7 +421,7 @@ def main(argv=None) -> int:
     if args.fidelity == "one_way":
         from . import oneway
 
-        oneway.run(cfg, spec, args.out, args.checkpoint)
+        oneway.run(cfg, spec, args.out, args.checkpoint, wall_path=args.wall)
     else:
         run(cfg, spec, args.out, args.checkpoint)
     return 0

@@ -8,6 +8,8 @@ import sys
 import tempfile
 from types import SimpleNamespace
 
+from ureterfsi.config import wall_sections
+
 
 def solve_command(config, *, model, level, symmetry, fidelity, mesh, out, log, threads, extra="", tasks=1,
                   mpi="mpiexec"):
@@ -37,9 +39,39 @@ def study_subset(w):
     return json.dumps({k: config[k] for k in keys} | {"model": config["models"][w.model]}, sort_keys=True)
 
 
+WALL_MOTION = "results/runs/one_way/wall_motion.nc"
+
+
+rule wall_motion:
+    """Step 1 of the one-way rung: the ureter wall alone (r-z) over [0, time.end], once for every one-way run
+    (their wall is the same: geometry and load do not depend on the stent model or the 3D mesh)."""
+    output:
+        WALL_MOTION,
+    params:
+        wall=lambda w: json.dumps(wall_sections(config), sort_keys=True),
+    log:
+        "results/logs/solve/one_way/wall_motion.log",
+    benchmark:
+        "results/benchmarks/solve/one_way/wall_motion.tsv"
+    threads: 1
+    priority: 10
+    resources:
+        mem_mb=config["study"]["memory_mb"]["axisymmetric"],
+    script:
+        "../scripts/wall_motion.py"
+
+
+def solve_inputs(w):
+    """The mesh, and for the one-way rung the shared wall motion."""
+    inputs = {"mesh": f"results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh"}
+    if w.fidelity == "one_way":
+        inputs["wall"] = WALL_MOTION
+    return inputs
+
+
 rule solve:
     input:
-        mesh="results/meshes/{symmetry}/model{model}_{level}.msh",
+        unpack(solve_inputs),
     output:
         "results/runs/{fidelity}/{symmetry}/model{model}_{level}.nc",
     params:
@@ -60,5 +92,7 @@ rule solve:
     run:
         solve_command(config, model=wildcards.model, level=wildcards.level, symmetry=wildcards.symmetry,
                       fidelity=wildcards.fidelity, mesh=input.mesh, out=output[0], log=log[0], threads=threads,
-                      extra=f"--checkpoint {params.checkpoint} {params.end}", tasks=resources.tasks,
+                      extra=f"--checkpoint {params.checkpoint} {params.end}"
+                            + (f" --wall {input.wall}" if wildcards.fidelity == "one_way" else ""),
+                      tasks=resources.tasks,
                       mpi=resources.mpi)
