@@ -70,8 +70,12 @@ class WallHistory:
 
     def inner(self, z, t):
         """(u_r, u_z, v_r, v_z) of the inner wall at axial positions z and time t."""
-        return tuple(self._at(f, self.z_inner, z, t)
-                     for f in (self.inner_ur, self.inner_uz, self.inner_vr, self.inner_vz))
+        return self.inner_displacement(z, t) + tuple(self._at(f, self.z_inner, z, t)
+                                                     for f in (self.inner_vr, self.inner_vz))
+
+    def inner_displacement(self, z, t):
+        """(u_r, u_z) of the inner wall at axial positions z and time t."""
+        return tuple(self._at(f, self.z_inner, z, t) for f in (self.inner_ur, self.inner_uz))
 
     def outer_radial(self, z, t):
         return self._at(self.outer_ur, self.z_outer, z, t)
@@ -220,7 +224,7 @@ def radial_blend(history: WallHistory, r_still: float, r_wall: float, axisymmetr
 
     def field(x, t):
         r = x[0] if axisymmetric else np.hypot(x[0], x[1])
-        ur, uz, _, _ = history.inner(x[1] if axisymmetric else x[2], t)
+        ur, uz = history.inner_displacement(x[1] if axisymmetric else x[2], t)
         w = np.clip((r - r_still) / (r_wall - r_still), 0.0, 1.0)
         if axisymmetric:
             return np.vstack([w * ur, w * uz])
