@@ -1,11 +1,12 @@
 """Scene-agnostic FSI engine: physics blocks (UFL forms), monolithic ALE coupling, time integration."""
 from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, TimeSettings
+from .linear_solvers import BlockGaussSeidel
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
 from .problem import MonolithicFSI, NewtonDivergence, SolverOptions
 from .scene import DirichletCondition, FluidRegion, OpenBoundary, Scene, SolidRegion, SurfaceLoad
 
 __all__ = [
-    "DirichletCondition", "FluidRegion", "LinearElastic", "MonolithicFSI", "MooneyRivlin",
+    "BlockGaussSeidel", "DirichletCondition", "FluidRegion", "LinearElastic", "MonolithicFSI", "MooneyRivlin",
     "NewtonDivergence", "NewtonianFluid", "Observer", "OpenBoundary", "Scene", "SolidRegion",
     "SolveFailure", "SolverOptions", "StepRecord", "SurfaceLoad", "TimeIntegrator", "TimeSettings",
 ]

@@ -27,6 +27,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics
+from .linear_solvers import KRYLOV, BlockGaussSeidel, direct_package
 from .materials import LinearElastic, MooneyRivlin
 from .operators import Operators
 from .scene import Scene
@@ -55,6 +56,8 @@ class SolverOptions:
     # a direct package (mumps, superlu_dist, superlu, umfpack: LU of the Newton system) or "fieldsplit": Krylov
     # with a Schur-complement block preconditioner (fluid-alone scenes with segregated mesh motion only, see
     # MonolithicFSI._setup_fieldsplit), whose memory grows ~linearly with the mesh
+    # or "block_gauss_seidel": GMRES with a solid -> mesh -> flow block Gauss-Seidel preconditioner, MUMPS LU on
+    # each block (coupled FSI scenes, monolithic mesh motion; ureterfsi.fsi.linear_solvers)
     linear_solver: str = "mumps"
     # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
     # ICC(0) instead of LU (whose factor is as large as the flow's: 1.0 vs 1.1 GB on the coarse model 3);
@@ -64,8 +67,11 @@ class SolverOptions:
     # to the whole displacement, not to its change in a step. 1e-9 of a ~1 mm wall motion is ~1e-12 m, a mesh
     # velocity error of ~1e-10 m/s at dt = 10 ms against mm/s urine velocities.
     mesh_motion_rtol: float = 1e-9
-    krylov_rtol: float = 1e-8           # fieldsplit: relative residual of each linear solve
-    krylov_max_iterations: int = 400    # fieldsplit: more is a failed linear solve (Newton step retried)
+    krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
+    krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
+    # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
+    # mesh blocks at the next fresh Jacobian
+    krylov_refactorise_iterations: int = 10
     # "monolithic": mesh-motion rows solved with the physics (needed whenever a solid moves the fluid
     # boundary); "segregated": fluid-alone scenes whose boundary motion is prescribed - the mesh motion
     # is a linear problem of its own (factorised once) solved before each step, and the Newton system
@@ -149,6 +155,9 @@ class MonolithicFSI:
         if opts.linear_solver == "fieldsplit" and not self.segregated:
             raise ValueError("linear_solver 'fieldsplit' preconditions the fluid-alone (v, p) system: it needs "
                              "mesh_motion_coupling 'segregated'; use a direct solver for coupled FSI")
+        if opts.linear_solver in KRYLOV and self.segregated:
+            raise ValueError(f"linear_solver {opts.linear_solver!r} preconditions the coupled FSI system: it needs "
+                             "mesh_motion_coupling 'monolithic'")
 
         # --- mixed space --------------------------------------------------------------------
         elements = {"velocity": ufl.VectorElement("Lagrange", cell, opts.velocity_degree),
@@ -252,8 +261,14 @@ class MonolithicFSI:
         prefix = f"ureterfsi_{id(self)}_"
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.A)
+        self.coupled_solver = None
+        self.counters = {"factorisations": 0, "reused_solves": 0}
         if self.options.linear_solver == "fieldsplit":
             self._setup_fieldsplit(prefix)
+        elif self.options.linear_solver == "block_gauss_seidel":
+            self.coupled_solver = BlockGaussSeidel(
+                self.ksp, prefix, self._split_is(self.coupled_splits()), opts.krylov_rtol,
+                opts.krylov_max_iterations, opts.krylov_refactorise_iterations, self.counters)
         elif self.segregated:
             self._setup_flow_lu(prefix)
         else:
@@ -268,7 +283,6 @@ class MonolithicFSI:
         self._jacobian_valid = False
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
                         "mesh_motion": 0.0}
-        self.counters = {"factorisations": 0, "reused_solves": 0}
         if self.options.linear_solver == "fieldsplit":
             self.counters["krylov_iterations"] = 0
         if self.segregated and self.mesh_motion_solver == "cg_icc":
@@ -424,6 +438,39 @@ class MonolithicFSI:
             out.append((name, PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=self.comm)))
         return out
 
+    def _owned(self, local_dofs) -> np.ndarray:
+        """Sorted owned local dofs marked by `local_dofs` on any process (ghost marks summed to the owner)."""
+        marker = fem.Function(self.W)
+        marker.x.array[np.asarray(local_dofs, dtype=np.int64)] = 1.0
+        vec = marker.vector
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return np.flatnonzero(vec.array_r > 0.0).astype(np.int32)
+
+    def coupled_splits(self) -> dict:
+        """Owned local dofs of the splits of the coupled Newton system (linear_solvers.BlockGaussSeidel):
+        "solid" = velocity and displacement on solid cells (the interface included), the solid pressure, the
+        pinned fluid pressures and the Dirichlet rows of the fluid displacement; "mesh" = the other (free) fluid
+        mesh displacement; "flow" = the fluid-only velocity and the fluid pressure."""
+        tdim = self.mesh.topology.dim
+        solid_cells = self._cells(self.solid_tags)
+        collapsed = {f: np.asarray(self.sub(f).collapse()[1]) for f in self.field_names}
+        parts = [fem.locate_dofs_topological(self.sub(f), tdim, solid_cells) for f in ("velocity", "displacement")]
+        parts += [collapsed["solid_pressure"]] if "solid_pressure" in collapsed else []
+        parts += [bc.dof_indices()[0] for bc in self.pin_bcs]
+        dirichlet = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs])
+        parts.append(np.intersect1d(dirichlet, collapsed["displacement"]))
+        solid = self._owned(np.concatenate(parts))
+        mesh = np.setdiff1d(self._owned(collapsed["displacement"]), solid)
+        nloc = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
+        flow = np.setdiff1d(np.arange(nloc, dtype=np.int32), np.union1d(solid, mesh))
+        return {"solid": solid, "mesh": mesh, "flow": flow}
+
+    def _split_is(self, splits: dict) -> dict:
+        """{name: PETSc IS of the global indices} of {name: owned local dofs}."""
+        offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
+        return {name: PETSc.IS().createGeneral((dofs + offset).astype(PETSc.IntType), comm=self.comm)
+                for name, dofs in splits.items()}
+
     def _setup_flow_lu(self, prefix):
         """Direct solve of a fluid-alone Newton system. Its Jacobian is block diagonal: the flow (velocity,
         pressure) block and the identity rows of the mirrored mesh displacement, whose columns the flow rows do
@@ -495,7 +542,7 @@ class MonolithicFSI:
         else:
             ksp.setType("preonly")
             ksp.getPC().setType("lu")
-            direct = "mumps" if self.options.linear_solver == "fieldsplit" else self.options.linear_solver
+            direct = direct_package(self.options.linear_solver)
             ksp.getPC().setFactorSolverType(direct)
             if direct == "mumps":
                 ksp.setOptionsPrefix(f"ureterfsi_mesh_{id(self)}_")
@@ -621,22 +668,26 @@ class MonolithicFSI:
         return self._jacobian_valid and math.isclose(self._jacobian_rate, self._rate(), rel_tol=1e-12)
 
     def invalidate_jacobian(self):
-        """Force a fresh Jacobian and factorisation at the next Newton iteration."""
+        """Force a fresh Jacobian and factorisation (of every block) at the next Newton iteration."""
         self._jacobian_valid = False
+        if self.coupled_solver is not None:
+            self.coupled_solver.invalidate()
 
     def _check_linear_solve(self, history):
         """A failed factorisation (e.g. MUMPS out of workspace) leaves a useless update: say so."""
         reason = self.ksp.getConvergedReason()
         if reason < 0:
             detail = ""
-            if self.options.linear_solver == "fieldsplit":
+            if self.coupled_solver is not None:
+                detail = self.coupled_solver.failure_detail()
+            elif self.options.linear_solver == "fieldsplit":
                 detail = (f" after {self.ksp.getIterationNumber()} Krylov iterations, residual "
                           f"{self.ksp.getResidualNorm():.3e} (-3: iteration limit, -5/-9: breakdown/NaN)")
             elif self.options.linear_solver == "mumps":
                 F = self._factor_matrix()
                 detail = (f"; MUMPS INFOG(1) = {F.getMumpsInfog(1)}, INFOG(2) = {F.getMumpsInfog(2)} "
                           f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
-            self._jacobian_valid = False
+            self.invalidate_jacobian()
             raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
 
     def newton(self):
@@ -662,11 +713,16 @@ class MonolithicFSI:
             if fresh:
                 self._assemble_jacobian()
                 self.ksp.setOperators(self.A)
+                if self.coupled_solver is not None:
+                    self.coupled_solver.operator_changed()
             t0 = _time.perf_counter()
-            self.ksp.solve(self.b, self.dx_vec)
+            if self.coupled_solver is not None:
+                self.coupled_solver.solve(self.b, self.dx_vec)
+            else:
+                self.ksp.solve(self.b, self.dx_vec)
+                if "krylov_iterations" in self.counters:
+                    self.counters["krylov_iterations"] += self.ksp.getIterationNumber()
             self._check_linear_solve(history)
-            if "krylov_iterations" in self.counters:
-                self.counters["krylov_iterations"] += self.ksp.getIterationNumber()
             self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
             self.counters["factorisations" if fresh else "reused_solves"] += 1
             self.x.vector.axpy(-1.0, self.dx_vec)
@@ -705,7 +761,7 @@ class MonolithicFSI:
                 its, history = self.newton()
                 break
             except NewtonDivergence as err:
-                self._jacobian_valid = False
+                self.invalidate_jacobian()
                 if k + 1 < len(guesses):
                     # an extrapolation over large or abrupt steps can overshoot: the previous state first,
                     # before the integrator halves the step

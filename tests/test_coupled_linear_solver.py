@@ -1,0 +1,151 @@
+"""linear_solver "block_gauss_seidel" (ureterfsi.fsi.linear_solvers): GMRES with a solid -> mesh -> flow block
+Gauss-Seidel preconditioner on the coupled Newton system gives the whole-system LU's Newton iterates and
+solution, on the axisymmetric Mooney-Rivlin tube (u-p mixed wall) and on Turek-Hron FSI1 (St Venant-Kirchhoff
+flag); the splits are the documented ones, a wrong split does not converge; kept factors follow the policy.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from dolfinx import fem
+from petsc4py import PETSc
+
+from _engine_cases import FLUID, WALL, tube_problem
+from ureterfsi.fsi import BlockGaussSeidel, NewtonDivergence, SolverOptions
+
+TIGHT = dict(newton_rtol=1e-10, newton_atol=1e-14, reuse_jacobian=True, reuse_contraction=0.3)
+
+
+def _run(linear_solver, steps=4, dt=2e-3, **options):
+    pb, _ = tube_problem(options=SolverOptions(linear_solver=linear_solver, **(TIGHT | options)))
+    histories = [pb.solve_steady()[1]]
+    for _ in range(steps):
+        histories.append(pb.step(dt)[1])
+    return pb, histories
+
+
+@pytest.fixture(scope="module")
+def lu_run():
+    return _run("mumps")
+
+
+def test_same_newton_iterates_and_solution_as_the_whole_system_lu(lu_run):
+    lu, lu_hist = lu_run
+    pb, hist = _run("block_gauss_seidel", krylov_rtol=1e-12)
+    # the same residual after every Newton iteration of every step, above the round-off floor (~1e-9 r0)
+    assert [len(h) for h in hist] == [len(h) for h in lu_hist]
+    for h, g in zip(hist, lu_hist):
+        h, g = np.array(h), np.array(g)
+        big = g > 1e-7 * g[0]
+        np.testing.assert_allclose(h[big], g[big], rtol=1e-6)
+    ref = lu.x.x.array
+    assert np.abs(pb.x.x.array - ref).max() <= 1e-8 * np.abs(ref).max()
+    c = pb.counters
+    assert c["krylov_iterations"] > 0 and c["factorisations"] == lu.counters["factorisations"]
+    assert pb.ksp.getPC().getType() == "fieldsplit" and pb.ksp.getType() == "gmres"
+
+
+def test_kept_block_factors_follow_the_policy():
+    """Never exceeded: solid and mesh factorised once, flow at every fresh Jacobian; always exceeded: every
+    block refactorised at every fresh Jacobian after the first solve."""
+    pb, _ = _run("block_gauss_seidel", steps=3, krylov_refactorise_iterations=10**6)
+    c = pb.counters
+    assert c["factorisations"] >= 2
+    assert (c["solid_factorisations"], c["mesh_factorisations"]) == (1, 1)
+    assert c["flow_factorisations"] == c["factorisations"]
+    pb, _ = _run("block_gauss_seidel", steps=3, krylov_refactorise_iterations=0)
+    c = pb.counters
+    assert c["solid_factorisations"] == c["mesh_factorisations"] == c["flow_factorisations"] == c["factorisations"]
+
+
+def _owned(pb, local):
+    nloc = pb.W.dofmap.index_map.size_local * pb.W.dofmap.index_map_bs
+    return np.unique(np.asarray(local)[np.asarray(local) < nloc])
+
+
+def test_splits_are_the_scene_regions(lu_run):
+    pb = lu_run[0]
+    s = pb.coupled_splits()
+    nloc = pb.W.dofmap.index_map.size_local * pb.W.dofmap.index_map_bs
+    allof = np.concatenate(list(s.values()))
+    assert allof.size == nloc and np.array_equal(np.sort(allof), np.arange(nloc)), "a partition of the dofs"
+    tdim = pb.mesh.topology.dim
+    ct = pb.scene.cell_tags
+    dofs = {f: _owned(pb, pb.W.sub(pb.index[f]).collapse()[1]) for f in pb.field_names}
+    on = {f: {r: _owned(pb, fem.locate_dofs_topological(pb.W.sub(pb.index[f]), tdim, ct.find(tag)))
+              for r, tag in (("fluid", FLUID), ("wall", WALL))} for f in ("velocity", "displacement")}
+    for f in ("velocity", "displacement"):
+        assert np.isin(on[f]["wall"], s["solid"]).all(), f"{f} of solid cells (interface included) in S"
+    assert np.isin(dofs["solid_pressure"], s["solid"]).all()
+    assert np.isin(s["mesh"], dofs["displacement"]).all()
+    assert np.isin(s["flow"], np.union1d(dofs["velocity"], dofs["pressure"])).all()
+    fluid_only = np.setdiff1d(on["displacement"]["fluid"], on["displacement"]["wall"])
+    assert 0 < s["mesh"].size < fluid_only.size     # the open ends' fixed mesh rows are in S
+    pinned = np.setdiff1d(dofs["pressure"], np.concatenate([s["flow"]]))
+    assert pinned.size > 0 and np.isin(pinned, s["solid"]).all()
+
+
+def _is(pb, dofs):
+    offset = pb.W.dofmap.index_map.local_range[0] * pb.W.dofmap.index_map_bs
+    return PETSc.IS().createGeneral((np.asarray(dofs) + offset).astype(PETSc.IntType), comm=pb.comm)
+
+
+def test_a_wrong_split_does_not_converge(lu_run):
+    """On the last Jacobian of the LU run, the interface velocity moved from S to F: GMRES stalls (the right split: a few iterations, the LU's
+    solution)."""
+    pb = lu_run[0]
+    s = pb.coupled_splits()
+    tdim, ct = pb.mesh.topology.dim, pb.scene.cell_tags
+    V = pb.W.sub(pb.index["velocity"])
+    interface = np.intersect1d(_owned(pb, fem.locate_dofs_topological(V, tdim, ct.find(FLUID))),
+                               _owned(pb, fem.locate_dofs_topological(V, tdim, ct.find(WALL))))
+    wrong = {"solid": np.setdiff1d(s["solid"], interface), "mesh": s["mesh"], "flow": np.union1d(s["flow"], interface)}
+    b = pb.A.createVecLeft()
+    pb.A.mult(pb.x.vector, b)          # a right-hand side with the scales of the physics
+    exact = b.duplicate()
+    lu = PETSc.KSP().create(pb.comm)
+    lu.setOperators(pb.A)
+    lu.setType("preonly")
+    lu.getPC().setType("lu")
+    lu.getPC().setFactorSolverType("mumps")
+    lu.solve(b, exact)
+    result = {}
+    for name, split in (("right", s), ("wrong", wrong)):
+        ksp = PETSc.KSP().create(pb.comm)
+        prefix = f"test_split_{name}_"
+        ksp.setOptionsPrefix(prefix)
+        ksp.setOperators(pb.A)
+        bgs = BlockGaussSeidel(ksp, prefix, {n: _is(pb, d) for n, d in split.items()}, 1e-8, 100, 10, {})
+        ksp.setFromOptions()
+        x = b.duplicate()
+        bgs.solve(b, x)
+        result[name] = (ksp.getConvergedReason(), ksp.getIterationNumber(), (x - exact).norm() / exact.norm())
+    reason, its, err = result["right"]
+    assert reason > 0 and its <= 10 and err <= 1e-6, result
+    assert result["wrong"][0] < 0, result
+
+
+def test_turek_hron_fsi1_quantities_equal_the_lu_path():
+    th = pytest.importorskip("ureterfsi.scenes.turek_hron")
+    lu = th.run_fsi1(0.5, options=SolverOptions(linear_solver="mumps"))
+    bgs = th.run_fsi1(0.5, options=SolverOptions(linear_solver="block_gauss_seidel", krylov_rtol=1e-10))
+    for key in ("drag", "lift", "ux_A", "uy_A"):
+        assert abs(getattr(bgs, key) - getattr(lu, key)) <= 1e-8 * abs(getattr(lu, key)), key
+    assert bgs.newton_iterations == lu.newton_iterations
+
+
+def test_refusals_and_failure_report():
+    from test_fluid_alone import tube as fluid_tube
+    from ureterfsi.fsi import FluidRegion, MonolithicFSI, NewtonianFluid, Scene
+    msh, ct, ft = fluid_tube(4)
+    fluid_alone = Scene(msh, ct, ft, fluid=FluidRegion([1], NewtonianFluid(1000.0, 1e-3)))
+    with pytest.raises(ValueError, match="needs non-empty splits"):
+        MonolithicFSI(fluid_alone, SolverOptions(linear_solver="block_gauss_seidel"))
+    with pytest.raises(ValueError, match="mesh_motion_coupling 'monolithic'"):
+        MonolithicFSI(fluid_alone, SolverOptions(linear_solver="block_gauss_seidel",
+                                                 mesh_motion_coupling="segregated"))
+    pb, _ = tube_problem(options=SolverOptions(linear_solver="block_gauss_seidel", krylov_max_iterations=1,
+                                               krylov_rtol=1e-14))
+    pb.solve_steady()               # the rest state: no linear solve
+    with pytest.raises(NewtonDivergence, match="after 1 GMRES iterations"):
+        pb.step(2e-3)
