@@ -1,8 +1,11 @@
 """Scene-agnostic FSI engine: physics blocks (UFL forms), monolithic ALE coupling, time integration."""
+from .jitlog import demote_compiler_logs
 from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, TimeSettings
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
 from .problem import MonolithicFSI, NewtonDivergence, SolverOptions
 from .scene import DirichletCondition, FluidRegion, OpenBoundary, Scene, SolidRegion, SurfaceLoad
+
+demote_compiler_logs()
 
 __all__ = [
     "DirichletCondition", "FluidRegion", "LinearElastic", "MonolithicFSI", "MooneyRivlin",
