@@ -1,10 +1,8 @@
 """Equality of results that went through the same arithmetic, to the rounding it can carry.
 
-Two runs of the same code on the same data agree bit for bit only if every reduction is summed in the same
-order; a threaded BLAS inside the sparse LU (OpenBLAS splits the dense front updates over threads) may
-not guarantee that, and a sum over many cancelling terms (a flux through a hole) then differs in its last
-bits. The tolerance is a few units in the last place of the quantity's scale, |a - b| <= ulps * eps *
-max|b|, never a relative tolerance per element.
+Two runs of the same code on the same data are not promised to agree bit for bit (issue 14 §5), and a sum
+over many cancelling terms (a flux through a hole) shows it first. The tolerance is a few units in the last
+place of the quantity's scale, |a - b| <= ulps * eps * max|b|, never a relative tolerance per element.
 """
 from __future__ import annotations
 
