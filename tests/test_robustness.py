@@ -172,9 +172,9 @@ def test_checkpoint_of_a_different_problem_size_is_refused(tmp_path):
 # ---------------------------------------------------------------------------------------------
 # 6. progress log
 LOG_LINE = re.compile(
-    r"step\s+(?P<step>\d+)\s+t=(?P<t>\S+) s\s+dt=(?P<dt>\S+) s\s+newton=\s*(?P<its>\d+)\s+"
-    r"residual=(?P<res>\S+) \(from (?P<res0>\S+)\)\s+min J_ale=(?P<jmin>\S+)\s+"
-    r"(?P<wall>\S+) s/step\s+ETA (?P<eta>\d+:\d\d:\d\d)$")
+    r"step (?P<step>\d+) of ~(?P<total>\d+) \((?P<pct>\S+) %\)\s+ETA (?P<eta>unknown|\d+:\d\d:\d\d)\s+"
+    r"t=(?P<t>\S+) s\s+dt=(?P<dt>\S+) s\s+newton=\s*(?P<its>\d+)\s+"
+    r"residual=(?P<res>\S+) \(from (?P<res0>\S+)\)\s+min J_ale=(?P<jmin>\S+)\s+(?P<wall>\S+) s/step$")
 
 
 def test_progress_log_line_per_step(caplog):
@@ -196,4 +196,6 @@ def test_progress_log_line_per_step(caplog):
         jmin = float(m["jmin"])
         assert math.isfinite(jmin) and jmin == pytest.approx(rec.min_ale_jacobian, abs=1e-4)
         assert float(m["wall"]) >= 0.0
+        assert int(m["total"]) == 4 and float(m["pct"]) == pytest.approx(100 * rec.time / (4 * DT), abs=0.05)
+    assert LOG_LINE.match(lines[0])["eta"] == "unknown"        # the first step (compilation) is no rate
     assert LOG_LINE.match(lines[-1])["eta"] == "0:00:00"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Idempotent set-up of ureterfsi on Debian 12: Debian's FEniCSx/gmsh/MPI stack, then a venv
-# that sees it (--system-site-packages) with the pure-Python tools from pip, numpy pinned to
-# Debian's build (workflow/envs/constraints.txt). A second run only checks and returns.
+# that sees it (--system-site-packages) with the pure-Python tools from pip at the versions of
+# workflow/envs/lock.txt, numpy pinned to Debian's build (workflow/envs/constraints.txt); prints both
+# sides' versions. A second run only checks and returns.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
@@ -22,14 +23,27 @@ if [ ! -x .venv/bin/python ]; then
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
 
+# Every pip-side distribution is pinned by workflow/envs/lock.txt (bash workflow/envs/lock.sh makes it);
+# a lock older than requirements.txt/constraints.txt is refused rather than installed around.
+want_req=$(cat workflow/envs/requirements.txt workflow/envs/constraints.txt | sha256sum | cut -d' ' -f1)
+if ! head -1 workflow/envs/lock.txt | grep -q "requirements sha256 $want_req"; then
+  echo "setup: workflow/envs/lock.txt does not match requirements.txt + constraints.txt: run bash workflow/envs/lock.sh" >&2
+  exit 1
+fi
 stamp=.venv/.ureterfsi-requirements
-want=$(cat workflow/envs/requirements.txt workflow/envs/constraints.txt | sha256sum | cut -d' ' -f1)
+want=$(cat workflow/envs/requirements.txt workflow/envs/constraints.txt workflow/envs/lock.txt | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-  echo "setup: installing Python packages into .venv"
-  .venv/bin/pip install -q --disable-pip-version-check \
-    -c workflow/envs/constraints.txt -r workflow/envs/requirements.txt
+  echo "setup: installing Python packages into .venv (workflow/envs/lock.txt)"
+  .venv/bin/pip install -q --disable-pip-version-check -c workflow/envs/constraints.txt \
+    -c workflow/envs/lock.txt -r workflow/envs/lock.txt -r workflow/envs/requirements.txt
   echo "$want" > "$stamp"
 fi
+echo "setup: pip side (.venv): $(.venv/bin/pip freeze --local --disable-pip-version-check | tr '\n' ' ')"
+echo "setup: Debian side: $(grep -v '^#' workflow/envs/debian.txt | cut -d= -f1 | xargs dpkg-query -W -f '${Package}=${Version} ' 2>/dev/null || true)"
+while IFS= read -r pv; do
+  have=$(dpkg-query -W -f '${Package}=${Version}' "${pv%%=*}" 2>/dev/null || echo "${pv%%=*} missing")
+  [ "$have" = "$pv" ] || echo "setup: warning: Debian $have, workflow/envs/debian.txt says $pv" >&2
+done < <(grep -v '^#' workflow/envs/debian.txt)
 
 # Make the package importable from the venv without a build step.
 site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')

@@ -1,9 +1,12 @@
 """Scene-agnostic FSI engine: physics blocks (UFL forms), monolithic ALE coupling, time integration."""
+from .jitlog import demote_compiler_logs
 from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, TimeSettings
 from .linear_solvers import BlockGaussSeidel
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
 from .problem import MonolithicFSI, NewtonDivergence, SolverOptions
 from .scene import DirichletCondition, FluidRegion, OpenBoundary, Scene, SolidRegion, SurfaceLoad
+
+demote_compiler_logs()
 
 __all__ = [
     "BlockGaussSeidel", "DirichletCondition", "FluidRegion", "LinearElastic", "MonolithicFSI", "MooneyRivlin",

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..provenance import atomic_path
 from .problem import MonolithicFSI, NewtonDivergence
+from .progress import Progress
 
 log = logging.getLogger("ureterfsi.fsi")
 
@@ -140,7 +141,8 @@ class TimeIntegrator:
             for obs in self.observers:
                 obs.observe(pb, step)
         outputs = sorted(t for t in s.output_times if t > pb.time + eps)
-        wall0, t0 = _time.perf_counter(), pb.time
+        t_first = self.records[0].time - self.records[0].dt if self.records else pb.time
+        progress = Progress(min(t_first, pb.time), s.end, _time.perf_counter()) if s.end > pb.time + eps else None
         while pb.time < s.end - eps:
             target = min([s.end] + [t for t in outputs if t > pb.time + eps])
             dt_try = min(dt, target - pb.time)
@@ -165,14 +167,12 @@ class TimeIntegrator:
             jmin = pb.min_ale_jacobian()
             wall = _time.perf_counter() - tic
             self.records.append(StepRecord(step, pb.time, dt_try, its, history[-1], jmin, wall))
-            elapsed = _time.perf_counter() - wall0
-            done = (pb.time - t0) / max(s.end - t0, 1e-300)
-            eta = elapsed * (1.0 - done) / max(done, 1e-12)
+            progress.update(step, pb.time, dt_try, dt_try if attempt else min(s.dt, 2.0 * dt), _time.perf_counter())
             krylov = getattr(pb, "counters", {}).get("krylov_iterations")
-            log.info("step %5d  t=%.5f s  dt=%.3e s  newton=%2d%s  residual=%.3e (from %.3e)  "
-                     "min J_ale=%.4f  %.2f s/step  ETA %s", step, pb.time, dt_try, its,
+            log.info("%s  t=%.5f s  dt=%.3e s  newton=%2d%s  residual=%.3e (from %.3e)  "
+                     "min J_ale=%.4f  %.2f s/step", progress.describe(), pb.time, dt_try, its,
                      "" if krylov is None else f"  krylov={krylov - krylov0:3d}", history[-1],
-                     history[0], jmin, wall, _format_seconds(eta))
+                     history[0], jmin, wall)
             if jmin <= s.min_ale_jacobian:
                 raise SolveFailure(f"ALE mesh inverted at t={pb.time:.6g} s (step {step}): minimum "
                                    f"Jacobian {jmin:.3e} <= {s.min_ale_jacobian}; refine the mesh near "
@@ -183,10 +183,3 @@ class TimeIntegrator:
             if s.checkpoint_interval and step % s.checkpoint_interval == 0:
                 self.save_checkpoint(step, dt)
         return self.records
-
-
-def _format_seconds(sec: float) -> str:
-    sec = int(round(sec))
-    h, rem = divmod(sec, 3600)
-    m, s = divmod(rem, 60)
-    return f"{h:d}:{m:02d}:{s:02d}"
