@@ -133,3 +133,55 @@ def test_bad_sidecar(rz_mesh, tmp_path):
     with pytest.raises(BadFile) as err:
         read_json(lst, MESH_SIDECAR)
     _one_line(err, lst, "a JSON list")
+
+
+# ------------------------------------------------------------------------------------ checkpoint identity
+def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root, monkeypatch, caplog):
+    """Issue 14 part 1: a run with peak_traction 5e4 stopped after its first checkpoint, then the same
+    target with 1e5: the stale checkpoint is set aside, the run starts at t = 0 and equals a clean 1e5 run."""
+    import logging
+
+    from ureterfsi.fsi import TimeIntegrator
+    from ureterfsi.study import RunSpec, run
+
+    msh, _ = rz_mesh
+    base = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    base["time"]["checkpoint_interval"] = 1
+    low, high = json.loads(json.dumps(base)), json.loads(json.dumps(base))
+    low["peristalsis"]["peak_traction"], high["peristalsis"]["peak_traction"] = 5e4, 1e5
+    spec = RunSpec("1", "coarse", "axisymmetric", str(msh), end=0.04)
+    ckpt = tmp_path / "ckpt" / "model1.npz"
+
+    save = TimeIntegrator.save_checkpoint
+
+    def save_then_stop(self, step, dt_next):
+        save(self, step, dt_next)
+        raise KeyboardInterrupt("stopped after the first checkpoint")
+
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        run(low, spec, str(tmp_path / "low.nc"), str(ckpt))
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save)
+    assert (ckpt.parent / "model1.rank0of1.npz").exists()
+
+    with caplog.at_level(logging.INFO, logger="ureterfsi"):
+        resumed = run(high, spec, str(tmp_path / "high.nc"), str(ckpt))
+    lines = [r.getMessage() for r in caplog.records if "not resumed" in r.getMessage()]
+    assert len(lines) == 1 and "written by another run (peristalsis.peak_traction 50000.0 -> 100000.0)" in lines[0]
+    assert "starting from t = 0" in lines[0] and "resumed from checkpoint" not in caplog.text
+    assert len(list(ckpt.parent.glob("model1.rank0of1.stale-*.npz"))) == 1
+    clean = run(high, spec, str(tmp_path / "clean.nc"))
+    assert resumed["time"].values[0] == 0.0
+    for name in ("max_wall_displacement", "outlet_flux", "wall_radial_displacement"):
+        np.testing.assert_allclose(resumed[name].values, clean[name].values, rtol=1e-10, atol=1e-20, err_msg=name)
+    # the same configuration does resume, and gives the clean run
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        run(high, spec, str(tmp_path / "again.nc"), str(ckpt))
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save)
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="ureterfsi"):
+        again = run(high, spec, str(tmp_path / "again.nc"), str(ckpt))
+    assert "resumed from checkpoint: step 1" in caplog.text and "not resumed" not in caplog.text
+    np.testing.assert_allclose(again["max_wall_displacement"].values, clean["max_wall_displacement"].values,
+                               rtol=1e-10, atol=1e-20)
