@@ -185,3 +185,17 @@ def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root,
     assert "resumed from checkpoint: step 1" in caplog.text and "not resumed" not in caplog.text
     np.testing.assert_allclose(again["max_wall_displacement"].values, clean["max_wall_displacement"].values,
                                rtol=1e-10, atol=1e-20)
+
+
+def test_solve_of_a_truncated_mesh_is_one_line_on_stderr(rz_mesh, tmp_path, repo_root, capsys):
+    from ureterfsi.study import main
+
+    msh, _ = rz_mesh
+    cut = tmp_path / "cut.msh"
+    cut.write_bytes(msh.read_bytes()[:5000])
+    code = main(["--config", str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml"),
+                 "--model", "1", "--level", "coarse", "--symmetry", "axisymmetric", "--mesh", str(cut),
+                 "--out", str(tmp_path / "out.nc")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1] == f"{cut}: truncated gmsh mesh (does not end with a closing '$End...' section tag)"
+    assert not (tmp_path / "out.nc").exists()
