@@ -126,7 +126,7 @@ def _runs_by(paths, attr: str) -> dict:
         run = open_run(p)
         key = str(run.attrs[attr])
         if key in runs:
-            raise BadFile(p, f"a second run with {attr} {key} (the first: {runs[key].encoding.get('source')})")
+            raise BadFile(p, f"two runs with {attr} {key}: this one and {runs[key].encoding.get('source')}")
         runs[key] = run
     if not runs:
         raise ValueError(f"no run file to combine by {attr}")

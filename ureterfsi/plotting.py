@@ -20,7 +20,7 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from . import tags  # noqa: E402
-from .checked_io import MESH_SIDECAR, check_msh, gmsh_error, read_json  # noqa: E402
+from .checked_io import Contract, check_msh, gmsh_error, read_json  # noqa: E402
 
 # Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
 # figures.hole_velocity_times) through wave_times() and hole_figures().
@@ -338,11 +338,15 @@ def fig_hole_flux(ds: xr.Dataset):
 
 
 # ---------------------------------------------------------------------------------------------- Table 1
+TABLE1_SIDECAR = Contract("mesh sidecar", attrs=("model", "level", "symmetry", "cells", "cells_total", "hole_pair_z",
+                                                "hole_channels_found"))   # what table1 reads
+
+
 def table1(cfg: dict, sidecars) -> list[dict]:
     """Rows of Table 1 (config models) with hole-pair positions and element counts of the meshes."""
     info = {}
     for p in sidecars:
-        d = read_json(p, MESH_SIDECAR)
+        d = read_json(p, TABLE1_SIDECAR)
         info[str(d["model"])] = d
     rows = []
     for m in sorted(cfg["models"], key=lambda s: (len(s), s)):
