@@ -199,3 +199,28 @@ def test_solve_of_a_truncated_mesh_is_one_line_on_stderr(rz_mesh, tmp_path, repo
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and err[-1] == f"{cut}: truncated gmsh mesh (does not end with a closing '$End...' section tag)"
     assert not (tmp_path / "out.nc").exists()
+
+
+def test_snakemake_rule_log_gets_the_line(tmp_path, repo_root):
+    """End to end through Snakemake: a figure rule fed a truncated dataset fails, its log holds the line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bad = tmp_path / "models_coarse.nc"
+    xr.Dataset({"x": ("t", np.zeros(100))}).to_netcdf(bad)
+    bad.write_bytes(bad.read_bytes()[:3000])
+    (tmp_path / "Snakefile").write_text(
+        "rule fig04_outlet_flow:\n"
+        f"    input: models='{bad}'\n"
+        "    output: 'fig04.png'\n"
+        "    params: figures={'dpi': 50}\n"
+        "    log: 'fig04.log'\n"
+        f"    script: '{repo_root}/workflow/scripts/plot_figure.py'\n")
+    snakemake = Path(sys.executable).with_name("snakemake")
+    proc = subprocess.run([str(snakemake), "--cores", "1", "-s", "Snakefile"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode != 0
+    text = (tmp_path / "fig04.log").read_text()
+    assert f"{bad}: truncated or corrupt netCDF" in text and "Traceback" not in text, text
+    assert f"rule fig04_outlet_flow: {bad}: truncated or corrupt netCDF" in proc.stderr
