@@ -18,6 +18,7 @@ import pytest
 import xarray as xr
 
 from ureterfsi import aggregate, plotting
+from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.study import CF, HOLE_FRACTION, N_HOLE, N_LINE, RunSpec, UreterProbes, probes_dataset
 
@@ -306,7 +307,8 @@ def test_table1(cfg, tmp_path):
         z = hole_pair_positions(UreterGeometry.from_config(cfg), sm).tolist()
         p.write_text(json.dumps({"model": m, "level": "coarse", "symmetry": "quarter", "cells_total": 1000 * int(m),
                                  "cells": {"fluid": 500, "ureter": 400} | ({"stent": 100} if sm.stent else {}),
-                                 "hole_pair_z": z, "hole_channels_found": len(z)}))
+                                 "hole_pair_z": z, "hole_channels_found": len(z),
+                                 FORMAT_VERSION_ATTR: FORMAT_VERSION}))
         sidecars.append(p)
     rows = plotting.table1(cfg, sidecars)
     assert [r["label"] for r in rows] == ["No stent", "5 mm", "10 mm", "25 mm"]

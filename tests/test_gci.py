@@ -18,7 +18,9 @@ import pytest
 import xarray as xr
 
 from ureterfsi import aggregate
-from ureterfsi.gci import (DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size, three_grid_gci,
+from ureterfsi.checked_io import open_netcdf
+from ureterfsi.provenance import FORMAT_VERSION
+from ureterfsi.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size, three_grid_gci,
                            write_gci_table)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -171,7 +173,7 @@ def convergence_dataset(cells=(60000, 140000, 320000), levels=("coarse", "medium
         units, long_name = aggregate.cf_meta(str(name))
         ds[name].attrs.update(units=units, long_name=long_name)
     ds.attrs.update(model="3", probe_time=1.5, levels=",".join(levels), config_hash="abc", git_commit="deadbeef",
-                    created="2026-01-01T00:00:00+00:00", run_fine_cells=int(cells[-1]), Conventions="CF-1.8",
+                    created="2026-01-01T00:00:00+00:00", ureterfsi_format_version=FORMAT_VERSION, run_fine_cells=int(cells[-1]), Conventions="CF-1.8",
                     title="ureterfsi mesh convergence: model 3, t = 1.5 s")
     return ds, f, z
 
@@ -209,7 +211,7 @@ def test_gci_dataset_recovers_power_laws(tmp_path):
     assert ds.attrs["safety_factor"] == 1.25
     # netCDF round trip (atomic write of the workflow)
     aggregate.write_dataset(ds, tmp_path / "gci.nc")
-    back = aggregate.open_run(tmp_path / "gci.nc")
+    back = open_netcdf(tmp_path / "gci.nc", GCI_DATASET)
     assert list(back["diagnosis"].values) == ["monotone"] * 5
     np.testing.assert_allclose(back["apparent_order"], ds["apparent_order"])
 
@@ -283,7 +285,7 @@ def test_gci_table(tmp_path):
 
 def test_mesh_measure(tmp_path):
     p = tmp_path / "m.json"
-    p.write_text(json.dumps({"measure": "volume", "subdomain_measure": {
+    p.write_text(json.dumps({"ureterfsi_format_version": FORMAT_VERSION, "measure": "volume", "subdomain_measure": {
         "fluid": {"analytic": 1e-6, "mesh": 0.99e-6}, "stent": {"analytic": 2e-7, "mesh": 2e-7}}}))
     vol, dim = mesh_measure(p)
     assert vol == pytest.approx(1.2e-6) and dim == 3
@@ -296,7 +298,7 @@ def test_workflow_script(tmp_path):
     conv_path = tmp_path / "mesh_convergence.nc"
     aggregate.write_dataset(conv, conv_path)
     side = tmp_path / "model3_fine.json"
-    side.write_text(json.dumps({"measure": "volume", "subdomain_measure": {"fluid": {"analytic": 1e-6}}}))
+    side.write_text(json.dumps({"ureterfsi_format_version": FORMAT_VERSION, "measure": "volume", "subdomain_measure": {"fluid": {"analytic": 1e-6}}}))
     out, log = tmp_path / "gci.nc", tmp_path / "gci.log"
 
     class Files(list):
@@ -313,7 +315,7 @@ def test_workflow_script(tmp_path):
                           log=[str(log)], config={})
     script = REPO / "workflow" / "scripts" / "gci.py"
     runpy.run_path(str(script), init_globals={"snakemake": smk})
-    ds = aggregate.open_run(out)
+    ds = open_netcdf(out, GCI_DATASET)
     assert ds.attrs["mesh_measure"] == pytest.approx(1e-6) and ds["h"].attrs["units"] == "m"
     np.testing.assert_allclose(ds["apparent_order"], [P_FLUX, P_VM, P_LINE, P_LINE, P_LINE], rtol=1e-8)
     tab = SimpleNamespace(rule="table_gci", input=Files(gci=str(out)),
@@ -332,7 +334,7 @@ def test_workflow_rules_run(tmp_path, cfg, repo_root):
     aggregate.write_dataset(conv, tmp_path / "results/datasets/mesh_convergence.nc")
     side = tmp_path / f"results/meshes/{sym}/model{model}_{last}.json"
     side.parent.mkdir(parents=True)
-    side.write_text(json.dumps({"measure": "volume", "subdomain_measure": {"fluid": {"analytic": 1e-6}}}))
+    side.write_text(json.dumps({"ureterfsi_format_version": FORMAT_VERSION, "measure": "volume", "subdomain_measure": {"fluid": {"analytic": 1e-6}}}))
     rules = repo_root / "workflow" / "rules"
     (tmp_path / "Snakefile").write_text(
         f'configfile: "{repo_root}/config/config.yaml"\n'
@@ -343,7 +345,7 @@ def test_workflow_rules_run(tmp_path, cfg, repo_root):
                          timeout=300)
     assert run.returncode == 0, run.stderr[-3000:]
     assert time.perf_counter() - t0 < 60
-    ds = aggregate.open_run(tmp_path / "results/datasets/mesh_convergence_gci.nc")
+    ds = open_netcdf(tmp_path / "results/datasets/mesh_convergence_gci.nc", GCI_DATASET)
     np.testing.assert_allclose(ds["probe_z"][2:], [0.0125, 0.025, 0.0375])
     assert (tmp_path / "results/figures/table_gci.csv").stat().st_size > 0
     assert (tmp_path / "results/logs/aggregate/mesh_convergence_gci.log").stat().st_size > 0

@@ -161,12 +161,40 @@ def test_checkpoint_resume_reproduces_the_uninterrupted_run(tmp_path):
         assert _rel(ta[4:], tb[4:]) < 1e-12 or abs(ta[4] - tb[4]) < 1e-14
 
 
-def test_checkpoint_of_a_different_problem_size_is_refused(tmp_path):
+def test_checkpoint_of_a_different_problem_size_is_set_aside(tmp_path, caplog):
     pb, obs, integ = _run(tmp_path / "ckpt.npz", end=3 * DT)
     integ.run()
     pb, obs, other = _run(tmp_path / "ckpt.npz", end=6 * DT, n_axial=20)
-    with pytest.raises(SolveFailure, match=r"does not match this problem .* delete it to restart"):
-        other.run()
+    with caplog.at_level(logging.WARNING, logger="ureterfsi.fsi"):
+        records = other.run()
+    assert records[0].step == 1 and len(records) == 6
+    assert re.search(r"not resumed, of another problem size .* set aside as ckpt\.rank0of1\.stale-\S+\.npz; "
+                     r"starting from t = 0", caplog.text), caplog.text
+    assert len(list(tmp_path.glob("ckpt.rank0of1.stale-*.npz"))) == 1
+
+
+def test_checkpoint_of_another_identity_or_corrupt_is_set_aside(tmp_path, caplog):
+    path = tmp_path / "ckpt.npz"
+    pb, obs, integ = _run(path, end=3 * DT)
+    integ.settings.identity = {"load.peak": "5e4", "mesh_sha256": "a" * 64}
+    integ.run()
+    pb, obs, other = _run(path, end=3 * DT)
+    other.settings.identity = {"load.peak": "1e5", "mesh_sha256": "a" * 64}
+    with caplog.at_level(logging.WARNING, logger="ureterfsi.fsi"):
+        assert not other.has_checkpoint()
+    assert "written by another run (load.peak 5e4 -> 1e5)" in caplog.text, caplog.text
+    # truncated checkpoint: set aside, one line, restart from 0
+    pb, obs, integ = _run(path, end=3 * DT)
+    integ.run()
+    f = tmp_path / "ckpt.rank0of1.npz"
+    f.write_bytes(f.read_bytes()[:200])
+    caplog.clear()
+    pb, obs, again = _run(path, end=3 * DT)
+    with caplog.at_level(logging.WARNING, logger="ureterfsi.fsi"):
+        records = again.run()
+    assert len(records) == 3 and records[0].step == 1
+    assert "not resumed, unreadable (BadZipFile" in caplog.text, caplog.text
+    assert len(list(tmp_path.glob("ckpt.rank0of1.stale-*.npz"))) == 2
 
 
 # ---------------------------------------------------------------------------------------------

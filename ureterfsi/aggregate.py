@@ -23,8 +23,9 @@ import netCDF4  # noqa: F401,I001
 import numpy as np
 import xarray as xr
 
+from .checked_io import BadFile, Contract, open_netcdf
 from .provenance import atomic_path, provenance_attrs
-from .study import CF
+from .study import CF, RUN_FILE
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
 TIME_DECIMALS = 9            # times equal to 1 ns are the same instant (probe times, union grid)
@@ -67,10 +68,18 @@ def _annotate(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+# what the readers of the study datasets (figures, ureterfsi.gci) rely on
+MODELS_DATASET = Contract("models dataset", attrs=("mesh_level", "models"),
+                          variables=("model", "model_label", "time", "z", "probe_time", "outlet_flux",
+                                     "wall_radial_displacement", "outlet_hole_z"))
+CONVERGENCE_DATASET = Contract("mesh-convergence dataset", attrs=("model", "levels", "probe_time"),
+                               variables=("level", "z", "stent_von_mises_line", "cells", "dofs",
+                                          "peak_outlet_flux", "peak_stent_max_von_mises"))
+
+
 def open_run(path) -> xr.Dataset:
-    """A per-run probe dataset, loaded into memory (the file is closed)."""
-    with xr.open_dataset(path) as ds:
-        return ds.load()
+    """A per-run probe dataset (ureterfsi.study), checked (RUN_FILE), loaded into memory (the file is closed)."""
+    return open_netcdf(path, RUN_FILE)
 
 
 def _label(model: str, cfg: dict | None) -> str:
@@ -117,8 +126,7 @@ def _runs_by(paths, attr: str) -> dict:
         run = open_run(p)
         key = str(run.attrs[attr])
         if key in runs:
-            raise ValueError(f"two runs with {attr} {key}: {runs[key].encoding.get('source')} and {p}")
-        run.encoding["source"] = str(p)
+            raise BadFile(p, f"two runs with {attr} {key}: this one and {runs[key].encoding.get('source')}")
         runs[key] = run
     if not runs:
         raise ValueError(f"no run file to combine by {attr}")

@@ -61,16 +61,20 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from .checked_io import Contract, read_json
 from .provenance import atomic_path, provenance_attrs
 
+# what the readers of a GCI dataset (table_gci) rely on
+GCI_DATASET = Contract("GCI dataset", attrs=("fine_level", "medium_level", "coarse_level", "safety_factor"),
+                       variables=("quantity", "level", "value", "cells", "h", "r21", "r32", "apparent_order",
+                                  "extrapolated_value", "gci_fine21", "diagnosis", "probe_z"))
+SIDECAR = Contract("mesh sidecar", attrs=("measure", "subdomain_measure"))   # what mesh_measure reads
 SAFETY_FACTOR = 1.25                      # Celik et al. 2008 (and Roache) for three or more grids
 DEFAULT_POINTS_Z = (0.0125, 0.025, 0.0375)   # m: probe-line points of the GCI (quarter, half, three quarters of L)
 DEFAULT_SCALARS = ("peak_outlet_flux", "peak_stent_max_von_mises", "peak_outlet_hole_flux", "outlet_hole_peak_velocity")
@@ -236,7 +240,7 @@ def mesh_measure(sidecar) -> tuple[float, int]:
     """(total analytic measure, dimension) of a mesh from its JSON sidecar (ureterfsi.mesh): the volume of
     a 3D mesh (m3, d = 3) or the area of an axisymmetric r-z mesh (m2, d = 2). The analytic measure is the
     same for every mesh level, as h = (V/N)^(1/d) wants."""
-    info = json.loads(Path(sidecar).read_text())
+    info = read_json(sidecar, SIDECAR)
     total = float(sum(v["analytic"] for v in info["subdomain_measure"].values()))
     dim = 3 if info.get("measure", "volume") == "volume" else 2
     return total, dim

@@ -99,7 +99,10 @@ def recorded_error_agrees(recorded: float, measured: float) -> bool:
 def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
-    runs = {name: xr.load_dataset(p) for name, p in paths.items()}
+    from .checked_io import open_netcdf
+    from .study import RUN_FILE
+
+    runs = {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
     ref = runs[lad["reference"]]
     names = list(runs)
     quantities = [q for q in QUANTITIES if q in ref]

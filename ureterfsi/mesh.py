@@ -18,6 +18,7 @@ import numpy as np
 
 from ureterfsi import tags
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions, subdomain_volumes
+from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
 from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
 
 SYMMETRY_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.25}
@@ -380,12 +381,29 @@ def load_mesh(msh_path, comm):
     """
     from dolfinx.io import gmshio
 
-    gdim = None
+    gdim, bad = None, None
     if comm.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(msh_path))
-        gdim = 2 if max(d for d, _ in gmsh.model.getPhysicalGroups()) == 2 else 3
+        try:
+            check_msh(msh_path)
+            try:
+                gmsh.merge(str(msh_path))
+            except Exception as err:  # gmsh raises a bare Exception with its last error message
+                raise gmsh_error(msh_path, err) from None
+            groups = gmsh.model.getPhysicalGroups()
+            cell_dim = max((d for d, _ in groups), default=0)
+            cell_tags = {t for d, t in groups if d == cell_dim}
+            if cell_dim not in (2, 3) or not cell_tags <= set(tags.CELL_NAMES) or tags.FLUID not in cell_tags:
+                raise BadFile(msh_path, f"not a ureterfsi mesh (physical groups {sorted(groups)}; expected cells "
+                                        f"tagged {sorted(tags.CELL_NAMES)} with fluid {tags.FLUID})")
+            gdim = cell_dim
+        except BadFile as err:
+            bad = err
+            gmsh.finalize()
+    bad = comm.bcast(bad, root=0)
+    if bad is not None:
+        raise bad
     gdim = comm.bcast(gdim, root=0)
     try:
         return gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim)

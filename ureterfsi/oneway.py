@@ -38,6 +38,7 @@ from .fsi.problem import MonolithicFSI, dirichlet_bcs
 from .fsi.scene import DirichletCondition
 from .fsi.submesh import SubDomain
 from .probes import CellField, PointProbe, von_mises
+from .checked_io import BadFile, Contract, open_netcdf
 from .config import wall_sections
 from .provenance import config_hash
 
@@ -47,6 +48,12 @@ log = logging.getLogger("ureterfsi.oneway")
 # ------------------------------------------------------------------------------------------------
 # 1. wall
 # ------------------------------------------------------------------------------------------------
+# what WallHistory.from_dataset reads in a wall-motion file (rule wall_motion, write_wall_motion)
+WALL_MOTION = Contract("wall-motion file", attrs=("wall_config_hash",),
+                       variables=("time", "z_inner", "z_outer", "inner_radial_displacement",
+                                  "inner_axial_displacement", "inner_radial_velocity", "inner_axial_velocity",
+                                  "outer_radial_displacement"))
+
 @dataclass
 class WallHistory:
     """Recorded motion of the ureter wall surfaces (r-z solve): arrays (time, z)."""
@@ -108,14 +115,16 @@ class WallHistory:
         """The recorded motion of a wall_motion dataset, refused unless it was computed from the same wall
         configuration with the same time step and reaches `end`."""
         want = config_hash(wall_sections(cfg))
+        source = ds.encoding.get("source", "wall motion")
         if ds.attrs.get("wall_config_hash") != want:
-            raise ValueError(f"wall motion {ds.encoding.get('source', '')} was computed from another configuration "
-                             f"(wall_config_hash {ds.attrs.get('wall_config_hash')} != {want})")
+            raise BadFile(source, f"wall motion computed from another configuration "
+                                  f"(wall_config_hash {ds.attrs.get('wall_config_hash')} != {want})")
         t = ds["time"].values
         steps = np.diff(t)
-        if not np.allclose(steps, dt, rtol=1e-9, atol=0) or t[-1] < end - 1e-9 * max(dt, end):
-            raise ValueError(f"wall motion {ds.encoding.get('source', '')} covers [0, {t[-1]:g}] s in steps "
-                             f"{steps.min():g}-{steps.max():g} s; this run needs [0, {end:g}] s in steps of {dt:g} s")
+        if t.size < 2 or not np.allclose(steps, dt, rtol=1e-9, atol=0) or t[-1] < end - 1e-9 * max(dt, end):
+            raise BadFile(source, f"wall motion covers [0, {t[-1] if t.size else 0:g}] s in steps "
+                                  f"{steps.min() if steps.size else 0:g}-{steps.max() if steps.size else 0:g} s; "
+                                  f"this run needs [0, {end:g}] s in steps of {dt:g} s")
         return cls(t, ds["z_inner"].values, ds["inner_radial_displacement"].values,
                    ds["inner_axial_displacement"].values, ds["inner_radial_velocity"].values,
                    ds["inner_axial_velocity"].values, ds["z_outer"].values, ds["outer_radial_displacement"].values,
@@ -372,10 +381,9 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
     comm = MPI.COMM_WORLD
     if comm.size > 1:
         raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
-    settings = time_settings(cfg, spec, checkpoint_path)
+    settings = time_settings(cfg, spec, checkpoint_path, "one_way", wall_path)
     if wall_path:
-        with xr.open_dataset(wall_path) as wds:
-            history = WallHistory.from_dataset(wds.load(), cfg, settings.end, settings.dt)
+        history = WallHistory.from_dataset(open_netcdf(wall_path, WALL_MOTION), cfg, settings.end, settings.dt)
         log.info("wall (r-z) motion read from %s (%d steps, solved in %.1f s)", wall_path, len(history.time) - 1,
                  history.wall_time)
     else:

@@ -6,7 +6,6 @@ One function per figure; each returns a matplotlib Figure (Agg backend) in reada
 """
 from __future__ import annotations
 
-import json
 import os
 import tempfile
 from pathlib import Path
@@ -21,6 +20,7 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from . import tags  # noqa: E402
+from .checked_io import Contract, check_msh, gmsh_error, read_json  # noqa: E402
 
 # Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
 # figures.hole_velocity_times) through wave_times() and hole_figures().
@@ -84,7 +84,11 @@ def _read_msh(msh_path):
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(msh_path))
+        check_msh(msh_path)
+        try:
+            gmsh.merge(str(msh_path))
+        except Exception as err:  # gmsh raises a bare Exception with its last error message
+            raise gmsh_error(msh_path, err) from None
         node_tags, xyz, _ = gmsh.model.mesh.getNodes()
         coords = np.zeros((int(node_tags.max()) + 1, 3))
         coords[node_tags.astype(np.int64)] = xyz.reshape(-1, 3)
@@ -334,11 +338,15 @@ def fig_hole_flux(ds: xr.Dataset):
 
 
 # ---------------------------------------------------------------------------------------------- Table 1
+TABLE1_SIDECAR = Contract("mesh sidecar", attrs=("model", "level", "symmetry", "cells", "cells_total", "hole_pair_z",
+                                                "hole_channels_found"))   # what table1 reads
+
+
 def table1(cfg: dict, sidecars) -> list[dict]:
     """Rows of Table 1 (config models) with hole-pair positions and element counts of the meshes."""
     info = {}
     for p in sidecars:
-        d = json.loads(Path(p).read_text())
+        d = read_json(p, TABLE1_SIDECAR)
         info[str(d["model"])] = d
     rows = []
     for m in sorted(cfg["models"], key=lambda s: (len(s), s)):

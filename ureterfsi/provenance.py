@@ -15,6 +15,11 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+# Generation of the layout of every file ureterfsi writes (attribute FORMAT_VERSION_ATTR, set by
+# provenance_attrs); readers (ureterfsi.checked_io) refuse another one. Raise it when a reader would
+# misread an older file.
+FORMAT_VERSION = 1
+FORMAT_VERSION_ATTR = "ureterfsi_format_version"
 
 
 def config_hash(cfg: dict) -> str:
@@ -49,11 +54,12 @@ def package_versions() -> dict:
 
 
 def provenance_attrs(cfg: dict, **extra) -> dict:
-    """Flat, netCDF-safe provenance attributes: config hash, git commit, versions, creation time."""
+    """Flat, netCDF-safe provenance attributes: config hash, git commit, versions, creation time, file format."""
     attrs = {
         "config_hash": config_hash(cfg),
         "git_commit": git_commit(),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        FORMAT_VERSION_ATTR: FORMAT_VERSION,
     }
     attrs.update({f"version_{k}": v for k, v in package_versions().items()})
     attrs.update({k: (v if isinstance(v, (int, float, str)) else json.dumps(v)) for k, v in extra.items()})

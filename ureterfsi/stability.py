@@ -61,7 +61,6 @@ the place; otherwise it is "stable"):
 """
 from __future__ import annotations
 
-import json
 import logging
 import math
 import re
@@ -76,6 +75,7 @@ import numpy as np
 import xarray as xr
 
 from . import tags
+from .checked_io import MESH_SIDECAR, Contract, open_netcdf, read_json
 from .provenance import atomic_path, provenance_attrs
 
 log = logging.getLogger("ureterfsi.stability")
@@ -637,7 +637,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
             mesh, ct, ft = load_mesh(mesh_path, comm)
             side = Path(mesh_path).with_suffix(".json")
             if side.exists():
-                sidecar = json.loads(side.read_text())
+                sidecar = read_json(side, MESH_SIDECAR)
         cells = mesh.topology.index_map(mesh.topology.dim).size_global
         if holes:
             history = wall_history(ccfg, params["end_time"], setup["dt"])
@@ -774,6 +774,10 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     return ds
 
 
+# what combine reads in a per-case file (run_case)
+CASE_FILE = Contract("stability case file", attrs=("case",), variables=("case", "step", "time", "outcome"))
+
+
 def write_case(ds: xr.Dataset, path) -> None:
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp)
@@ -792,8 +796,7 @@ def combine(items, cfg: dict | None = None) -> xr.Dataset:
         if isinstance(it, xr.Dataset):
             runs.append(it)
         else:
-            with xr.open_dataset(it) as d:
-                runs.append(d.load())
+            runs.append(open_netcdf(it, CASE_FILE))
     if not runs:
         raise ValueError("no stability case to combine")
     names = [str(r["case"].values) for r in runs]

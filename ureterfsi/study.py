@@ -11,6 +11,7 @@ Every variable carries CF `units` and `long_name`; the dataset carries provenanc
 """
 from __future__ import annotations
 
+import json
 import logging
 import time as _time
 from dataclasses import dataclass
@@ -29,6 +30,7 @@ from .fsi import physics
 from .fsi.problem import MonolithicFSI
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
 from .probes import CellField, PointProbe, assemble_scalar, von_mises
+from .checked_io import Contract
 from .provenance import atomic_path, provenance_attrs
 from .scenes.ureter import pulse_centre, ureter_scene
 
@@ -260,6 +262,14 @@ CF = {
 }
 
 
+# what the readers of a run file (ureterfsi.aggregate, ureterfsi.ladder) rely on; the stent variables
+# exist only in stented runs
+RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity", "wall_time_s"),
+                    variables=("time", "z", "probe_time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity",
+                               "fluid_volume", "max_wall_displacement", "pulse_centre", "wall_radial_displacement",
+                               "step_time", "step_dt", "newton_iterations"))
+
+
 def _cf(da: xr.DataArray, name: str) -> xr.DataArray:
     units, long_name = CF[name]
     da.attrs.update(units=units, long_name=long_name)
@@ -308,13 +318,52 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     return ds
 
 
-def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None) -> TimeSettings:
-    """Time stepping of a run: config `time` with the run's end/dt overrides, checkpoints if a path is given."""
+def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",
+                  wall_path: str | None = None) -> TimeSettings:
+    """Time stepping of a run: config `time` with the run's end/dt overrides, checkpoints if a path is given
+    (bound to the run's identity, run_identity)."""
     tcfg = cfg["time"]
-    return TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"], output_times=tcfg["probe_times"],
-                        max_halvings=cfg["solver"]["max_step_halvings"],
-                        checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
-                        checkpoint_path=checkpoint_path)
+    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"], output_times=tcfg["probe_times"],
+                            max_halvings=cfg["solver"]["max_step_halvings"],
+                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
+                            checkpoint_path=checkpoint_path)
+    if checkpoint_path:
+        settings.identity = run_identity(cfg, spec, fidelity, settings.end, settings.dt, wall_path)
+    return settings
+
+
+# configuration sections a solve reads (with its own entry of `models`)
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
+
+
+def _flatten(prefix: str, value, out: dict) -> None:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), v, out)
+    else:
+        out[prefix] = json.dumps(value, sort_keys=True)
+
+
+def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float, wall_path: str | None = None) -> dict:
+    """What determines a run, component -> value (TimeSettings.identity): every key of the configuration
+    sections it reads (RUN_SECTIONS, `models.<model>`), the run's model, mesh level, symmetry, fidelity,
+    end and dt, the SHA-256 of the mesh file (and of the wall-motion file of a one-way run), and the
+    versions of ureterfsi and dolfinx."""
+    import dolfinx
+
+    from . import __version__
+    from .checked_io import sha256_file
+
+    out: dict = {}
+    _flatten("", {k: cfg[k] for k in RUN_SECTIONS}, out)
+    _flatten(f"models.{spec.model}", cfg["models"][spec.model], out)
+    out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,
+                "run.fidelity": fidelity, "run.end": repr(float(end)), "run.dt": repr(float(dt)),
+                "mesh_sha256": sha256_file(spec.mesh_path),
+                "version.ureterfsi": __version__, "version.dolfinx": dolfinx.__version__})
+    if wall_path:
+        out["wall_motion_sha256"] = sha256_file(wall_path)
+    return out
 
 
 def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers,
@@ -386,9 +435,11 @@ def main(argv=None) -> int:
     import argparse
     import sys
 
-    import json
+    from mpi4py import MPI as _MPI
 
+    from .checked_io import BadFile
     from .config import ConfigError, load_config, load_config_files
+    from .fsi import SolveFailure
 
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
                                  description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
@@ -419,12 +470,17 @@ def main(argv=None) -> int:
         print(err, file=sys.stderr)
         return 2
     spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt)
-    if args.fidelity == "one_way":
-        from . import oneway
+    try:
+        if args.fidelity == "one_way":
+            from . import oneway
 
-        oneway.run(cfg, spec, args.out, args.checkpoint, wall_path=args.wall)
-    else:
-        run(cfg, spec, args.out, args.checkpoint)
+            oneway.run(cfg, spec, args.out, args.checkpoint, wall_path=args.wall)
+        else:
+            run(cfg, spec, args.out, args.checkpoint)
+    except (BadFile, SolveFailure) as err:
+        if _MPI.COMM_WORLD.rank == 0:
+            print(err, file=sys.stderr)
+        return 1
     return 0
 
 

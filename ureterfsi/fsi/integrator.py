@@ -3,19 +3,24 @@
 A step whose Newton iteration fails (or gives a non-finite residual) is retried with dt/2, at most
 `max_halvings` times; after a success the step grows back by 2x per step up to the nominal dt.
 Steps are shortened to land exactly on every output time. An inverted ALE mesh stops the run.
-Checkpoints (every `checkpoint_interval` steps, atomically written) hold the state, its history
-and the observers' records; a re-run with the same checkpoint path resumes from the last one.
+Checkpoints (every `checkpoint_interval` steps, atomically written) hold the state, its history,
+the observers' records and the run's identity (TimeSettings.identity); a re-run with the same
+checkpoint path resumes from the last one only if it is readable, complete, of this problem's size
+and partition and of the same identity. Otherwise it is set aside (renamed *.stale-<UTC time>.npz),
+one line says why, and the run starts from t = 0.
 """
 from __future__ import annotations
 
 import abc
+import hashlib
 import json
 import logging
 import os
 import time as _time
 from dataclasses import dataclass, field
+from datetime import datetime, timezone
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
@@ -39,6 +44,30 @@ class TimeSettings:
     checkpoint_interval: int = 0          # steps; 0 disables
     checkpoint_path: Optional[str] = None
     min_ale_jacobian: float = 0.0         # stop when the minimum ALE Jacobian falls to this value
+    # what determines the run, component name -> value (strings; the caller's choice, e.g. config keys,
+    # file hashes, versions): a checkpoint of another identity is set aside, never resumed
+    identity: Mapping[str, str] = field(default_factory=dict)
+
+
+_CHECKPOINT_ARRAYS = ("x", "x_n", "x_nm1", "x_nm2", "cells", "meta")
+_CHECKPOINT_META = ("step", "time", "dt_prev", "dt_prev2", "dt_next", "observers", "records", "identity",
+                    "identity_hash")
+
+
+def identity_hash(identity: Mapping[str, str]) -> str:
+    """SHA-256 (hex) of the canonical JSON form of a run identity."""
+    return hashlib.sha256(json.dumps(dict(identity), sort_keys=True).encode()).hexdigest()
+
+
+def identity_differences(stored: Mapping[str, str], wanted: Mapping[str, str], limit: int = 4) -> str:
+    """'key old -> new; ...' for the components that differ (at most `limit`, then how many more)."""
+    def short(v):
+        v = "(absent)" if v is None else str(v)
+        return v[:12] + "..." if len(v) > 24 else v
+
+    keys = sorted(k for k in set(stored) | set(wanted) if stored.get(k) != wanted.get(k))
+    text = "; ".join(f"{k} {short(stored.get(k))} -> {short(wanted.get(k))}" for k in keys[:limit])
+    return text + (f"; and {len(keys) - limit} more" if len(keys) > limit else "")
 
 
 class Observer(abc.ABC):
@@ -73,6 +102,7 @@ class TimeIntegrator:
     settings: TimeSettings
     observers: list = field(default_factory=list)
     records: list = field(default_factory=list)
+    _pending: Optional[tuple] = field(default=None, init=False, repr=False)   # checked, not yet restored
 
     def _checkpoint_file(self):
         p = Path(self.settings.checkpoint_path)
@@ -83,9 +113,11 @@ class TimeIntegrator:
         if not self.settings.checkpoint_path:
             return
         pb = self.problem
+        identity = {str(k): str(v) for k, v in self.settings.identity.items()}
         meta = {"step": step, "time": pb.time, "dt_prev": pb.dt_prev, "dt_prev2": pb.dt_prev2, "dt_next": dt_next,
                 "observers": [o.state() for o in self.observers],
-                "records": [r.__dict__ for r in self.records]}
+                "records": [r.__dict__ for r in self.records],
+                "identity": identity, "identity_hash": identity_hash(identity)}
         with atomic_path(self._checkpoint_file()) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, x=pb.x.x.array, x_n=pb.x_n.x.array, x_nm1=pb.x_nm1.x.array, x_nm2=pb._x_nm2,
@@ -97,29 +129,89 @@ class TimeIntegrator:
         pb.invalidate_jacobian()
 
     def has_checkpoint(self) -> bool:
-        return bool(self.settings.checkpoint_path) and self._checkpoint_file().exists()
+        """A checkpoint this run can resume from exists (collective). A stale or unreadable one is set
+        aside (renamed, one log line) and the answer is False."""
+        return self._resumable() is not None
+
+    def _read_checkpoint(self, path: Path):
+        """(arrays, meta) of this rank's checkpoint, or (None, why it cannot be resumed)."""
+        pb = self.problem
+        if not path.exists():
+            return None, "missing on this rank"
+        try:
+            with np.load(path) as npz:
+                missing = [k for k in _CHECKPOINT_ARRAYS if k not in npz.files]
+                if missing:
+                    return None, f"incomplete (no array {missing[0]!r})"
+                data = {k: npz[k] for k in _CHECKPOINT_ARRAYS}
+            meta = json.loads(str(data["meta"]))
+        except Exception as err:  # BadZipFile, EOFError, zlib.error, ValueError (json), OSError
+            return None, f"unreadable ({type(err).__name__}: {' '.join(str(err).split())})"
+        missing = [k for k in _CHECKPOINT_META if k not in meta]
+        if missing:
+            return None, f"incomplete (no {missing[0]!r} in its metadata)"
+        wanted = {str(k): str(v) for k, v in self.settings.identity.items()}
+        if meta["identity_hash"] != identity_hash(wanted) or meta["identity"] != wanted:
+            return None, f"written by another run ({identity_differences(meta['identity'], wanted)})"
+        n = pb.x.x.array.shape
+        for key in ("x", "x_n", "x_nm1"):
+            if data[key].shape != n:
+                return None, f"of another problem size ({key} has {data[key].shape[0]} values, this problem {n[0]})"
+        if data["x_nm2"].shape != pb._x_nm2.shape:
+            return None, f"of another problem size (x_nm2 has {data['x_nm2'].shape[0]} values)"
+        # The arrays are in process-local numbering. In parallel the graph partitioner need not give
+        # the same cells to the same rank in two runs (same sizes, different layout): restoring would
+        # scramble the state.
+        if not np.array_equal(data["cells"], np.asarray(pb.mesh.topology.original_cell_index)):
+            return None, "written with another mesh partition (its process-local arrays cannot be restored)"
+        if len(meta["observers"]) != len(self.observers):
+            return None, f"holds {len(meta['observers'])} observer records, this run has {len(self.observers)} observers"
+        return (data, meta), None
+
+    def _resumable(self):
+        """(arrays, meta) of a checkpoint every rank can resume from, or None (collective); a checkpoint
+        that cannot be resumed is set aside."""
+        if not self.settings.checkpoint_path:
+            return None
+        if self._pending is not None:
+            return self._pending
+        path, comm = self._checkpoint_file(), self.problem.comm
+        if not comm.allreduce(int(path.exists())):
+            return None
+        state, why = self._read_checkpoint(path)
+        whys = comm.allgather(why)
+        bad = [(r, w) for r, w in enumerate(whys) if w]
+        if not bad:
+            self._pending = state
+            return state
+        stale = None
+        if path.exists():
+            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+            stale = path.with_name(f"{path.stem}.stale-{stamp}.npz")
+            k = 1
+            while stale.exists():
+                stale, k = path.with_name(f"{path.stem}.stale-{stamp}-{k}.npz"), k + 1
+            os.replace(path, stale)
+        comm.Barrier()
+        rank, why = bad[0]
+        where = f"rank {rank}: " if comm.size > 1 else ""
+        if comm.rank == 0:
+            log.warning("checkpoint %s not resumed, %s%s; set aside as %s; starting from t = 0", path, where, why,
+                        stale.name if stale else "(none on this rank)")
+        return None
 
     def load_checkpoint(self):
-        """Restore the last checkpoint if one exists. Returns (step, dt_next) or None."""
-        if not self.has_checkpoint():
+        """Restore the last checkpoint if this run can resume from it (see has_checkpoint). Returns
+        (step, dt_next) or None."""
+        state = self._resumable()
+        if state is None:
             return None
+        self._pending = None
+        data, meta = state
         pb = self.problem
-        data = np.load(self._checkpoint_file())
-        if data["x"].shape != pb.x.x.array.shape:
-            raise SolveFailure(f"checkpoint {self._checkpoint_file()} does not match this problem "
-                               f"({data['x'].shape} vs {pb.x.x.array.shape} values): delete it to restart")
-        # The arrays are in process-local numbering. In parallel the graph partitioner need not give
-        # the same cells to the same rank in two runs (same sizes, different layout): loading would
-        # scramble the state (NaN residuals or a silently wrong state). Refuse instead.
-        if "cells" in data and not np.array_equal(data["cells"], np.asarray(pb.mesh.topology.original_cell_index)):
-            raise SolveFailure(f"checkpoint {self._checkpoint_file()} was written with a different mesh "
-                               f"partition (the partitioner is not reproducible between parallel runs); "
-                               f"its process-local arrays cannot be restored: delete it to restart")
         pb.x.x.array[:], pb.x_n.x.array[:], pb.x_nm1.x.array[:] = data["x"], data["x_n"], data["x_nm1"]
-        meta = json.loads(str(data["meta"]))
-        pb.time, pb.dt_prev = meta["time"], meta["dt_prev"]
-        if "x_nm2" in data:       # the quadratic predictor's third state (absent from older checkpoints)
-            pb._x_nm2[:], pb.dt_prev2 = data["x_nm2"], meta["dt_prev2"]
+        pb._x_nm2[:] = data["x_nm2"]
+        pb.time, pb.dt_prev, pb.dt_prev2 = meta["time"], meta["dt_prev"], meta["dt_prev2"]
         pb.t.value = pb.time
         for obs, st in zip(self.observers, meta["observers"]):
             obs.load_state(st)

@@ -3,16 +3,18 @@
 import logging
 
 from ureterfsi.aggregate import combine_levels, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
-                    format="%(asctime)s %(levelname)s %(message)s")
-try:
-    ds = combine_levels(list(snakemake.input.runs), float(snakemake.params.time), snakemake.config)  # noqa: F821
-    write_dataset(ds, snakemake.output[0])  # noqa: F821
-except Exception:
-    logging.exception("aggregation of the mesh-convergence runs failed")
-    raise
-for lv in ds["level"].values:
-    d = ds.sel(level=lv)
-    logging.info("%s: %d cells, %d dofs, max line difference to the finest %.4g Pa", lv, d["cells"], d["dofs"],
-                 d["line_max_difference_to_finest"])
+smk = snakemake  # noqa: F821
+
+
+def main():
+    ds = combine_levels(list(smk.input.runs), float(smk.params.time), smk.config)
+    write_dataset(ds, smk.output[0])
+    for lv in ds["level"].values:
+        d = ds.sel(level=lv)
+        logging.info("%s: %d cells, %d dofs, max line difference to the finest %.4g Pa", lv, d["cells"], d["dofs"],
+                     d["line_max_difference_to_finest"])
+
+
+run_script(smk, main)

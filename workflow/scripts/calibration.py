@@ -5,14 +5,14 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ureterfsi.calibration import format_report, write_report  # noqa: E402
+from ureterfsi.workflow_log import run_script  # noqa: E402
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
-                    format="%(asctime)s %(levelname)s %(message)s")
-log = logging.getLogger("calibration")
-cfg = dict(snakemake.params.sections)  # noqa: F821  (geometry, ureter, peristalsis, time only)
-try:
-    report = write_report(cfg, snakemake.output[0])  # noqa: F821
-except Exception:
-    log.exception("calibration study failed")
-    raise
-log.info("\n%s", format_report(report))
+smk = snakemake  # noqa: F821
+
+
+def main():
+    report = write_report(dict(smk.params.sections), smk.output[0])   # geometry, ureter, peristalsis, time only
+    logging.info("\n%s", format_report(report))
+
+
+run_script(smk, main)

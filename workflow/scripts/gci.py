@@ -3,16 +3,16 @@
 (Grid Convergence Index, Celik et al. 2008). Outputs are written atomically."""
 import logging
 
-from ureterfsi.aggregate import open_run, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.aggregate import CONVERGENCE_DATASET, write_dataset  # first: imports netCDF4 before dolfinx
 from ureterfsi import gci
+from ureterfsi.checked_io import open_netcdf
+from ureterfsi.workflow_log import run_script
 
 smk = snakemake  # noqa: F821
-logging.basicConfig(filename=smk.log[0], level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s",
-                    force=True)   # Snakemake may have configured the root logger already
 
 
 def run_gci():
-    conv = open_run(smk.input.conv)
+    conv = open_netcdf(smk.input.conv, CONVERGENCE_DATASET)
     measure, dim = gci.mesh_measure(smk.input.mesh) if "mesh" in smk.input.keys() else (None, 3)
     ds = gci.gci_dataset(conv, points_z=[float(z) for z in smk.params.points_z],
                          safety_factor=float(smk.params.safety_factor), measure=measure, dim=dim, cfg=smk.config)
@@ -27,13 +27,13 @@ def run_gci():
 
 
 def run_table():
-    ds = open_run(smk.input.gci)
+    ds = open_netcdf(smk.input.gci, gci.GCI_DATASET)
     gci.write_gci_table(ds, smk.output.csv, smk.output.md)
 
 
-try:
+def main():
     {"gci": run_gci, "table_gci": run_table}[smk.rule]()
-except Exception:
-    logging.exception("%s failed", smk.rule)
-    raise
-logging.info("%s -> %s", smk.rule, list(smk.output))
+    logging.info("%s -> %s", smk.rule, list(smk.output))
+
+
+run_script(smk, main)

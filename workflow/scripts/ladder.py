@@ -5,17 +5,18 @@ import logging
 from ureterfsi.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
 from ureterfsi import ladder, plotting
 from ureterfsi.provenance import atomic_path
+from ureterfsi.workflow_log import run_script
 
 smk = snakemake  # noqa: F821
-logging.basicConfig(filename=smk.log[0], level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s",
-                    force=True)
-try:
+
+
+def main():
     ds = ladder.ladder_dataset(dict(zip(smk.params.rungs, smk.input.runs)), smk.config)
     write_dataset(ds, smk.output.dataset)
     with atomic_path(smk.output.md) as tmp:
         tmp.write_text(ladder.ladder_table(ds))
     plotting.save_figure(plotting.ladder_pareto(ds), smk.output.figures, dpi=smk.params.figures["dpi"])
     logging.info("\n%s", ladder.ladder_table(ds))
-except Exception:
-    logging.exception("ladder failed")
-    raise
+
+
+run_script(smk, main)

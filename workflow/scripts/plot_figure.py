@@ -1,22 +1,22 @@
 """Snakemake script of every figure rule (workflow/rules/figures.smk): the figure is chosen by the rule
 name; the outputs are written atomically in every configured format (ureterfsi.plotting)."""
-import json
 import logging
 
 from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
 from ureterfsi import plotting
+from ureterfsi.checked_io import MESH_SIDECAR, open_netcdf, read_json
+from ureterfsi.workflow_log import run_script
 
 smk = snakemake  # noqa: F821
-logging.basicConfig(filename=smk.log[0], level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
 
 
 def models():
-    return aggregate.open_run(smk.input.models)
+    return open_netcdf(smk.input.models, aggregate.MODELS_DATASET)
 
 
 def draw(rule: str):
     if rule == "fig02_domain":
-        info = json.loads(open(smk.input.json).read())
+        info = read_json(smk.input.json, MESH_SIDECAR)
         model = smk.config["models"][str(info["model"])]
         what = f"{model['label']} between hole pairs" if model["stent"] else model["label"]
         return plotting.fig02_domain(
@@ -24,7 +24,7 @@ def draw(rule: str):
             title=f"Model {info['model']} ({what}), {info['symmetry']} model, "
                   f"{format(info['cells_total'], ',').replace(',', ' ')} elements: mesh in the plane x = 0")
     if rule == "fig03_mesh_convergence":
-        return plotting.fig03_mesh_convergence(aggregate.open_run(smk.input.conv))
+        return plotting.fig03_mesh_convergence(open_netcdf(smk.input.conv, aggregate.CONVERGENCE_DATASET))
     if rule == "fig04_outlet_flow":
         return plotting.fig04_outlet_flow(models())
     if rule == "fig05_wall_displacement":
@@ -38,7 +38,7 @@ def draw(rule: str):
     raise ValueError(f"plot_figure.py does not know rule {rule!r}")
 
 
-try:
+def main():
     if smk.rule == "table1":
         cfg = {"models": smk.params.models}
         rows = plotting.table1(cfg, list(smk.input.sidecars))
@@ -46,7 +46,7 @@ try:
     else:
         fig = draw(smk.rule)
         plotting.save_figure(fig, list(smk.output), dpi=float(smk.params.figures["dpi"]))
-except Exception:
-    logging.exception("%s failed", smk.rule)
-    raise
-logging.info("%s -> %s", smk.rule, list(smk.output))
+    logging.info("%s -> %s", smk.rule, list(smk.output))
+
+
+run_script(smk, main)

@@ -2,18 +2,20 @@
 `case`, ureterfsi.stability.combine) and a Markdown table of the outcomes."""
 import logging
 
-from ureterfsi.provenance import atomic_path
 from ureterfsi.stability import combine, outcome_table, write_case  # first: netCDF4 before dolfinx
+from ureterfsi.provenance import atomic_path
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
-                    format="%(asctime)s %(levelname)s %(message)s")
-try:
-    ds = combine(list(snakemake.input.cases), snakemake.config)  # noqa: F821
-    write_case(ds, snakemake.output.nc)  # noqa: F821
+smk = snakemake  # noqa: F821
+
+
+def main():
+    ds = combine(list(smk.input.cases), smk.config)
+    write_case(ds, smk.output.nc)
     table = outcome_table(ds)
-    with atomic_path(snakemake.output.md) as tmp:  # noqa: F821
+    with atomic_path(smk.output.md) as tmp:
         tmp.write_text(table + "\n")
-except Exception:
-    logging.exception("combining the stability cases failed")
-    raise
-logging.info("%d cases -> %s\n%s", ds.sizes["case"], snakemake.output.nc, table)  # noqa: F821
+    logging.info("%d cases -> %s\n%s", ds.sizes["case"], smk.output.nc, table)
+
+
+run_script(smk, main)

@@ -3,16 +3,17 @@
 import logging
 
 from ureterfsi.plotting import save_figure, stability_map  # first: netCDF4 before anything else
+from ureterfsi.checked_io import Contract, open_netcdf
+from ureterfsi.workflow_log import run_script
 
-import xarray as xr  # noqa: E402
+smk = snakemake  # noqa: F821
+STABILITY_DATASET = Contract("stability dataset", attrs=("cases",), variables=("case", "outcome"))
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
-                    format="%(asctime)s %(levelname)s %(message)s")
-try:
-    with xr.open_dataset(snakemake.input[0]) as ds:  # noqa: F821
-        fig = stability_map(ds.load())
-    save_figure(fig, list(snakemake.output), dpi=snakemake.params.figures["dpi"])  # noqa: F821
-except Exception:
-    logging.exception("stability map failed")
-    raise
-logging.info("-> %s", list(snakemake.output))  # noqa: F821
+
+def main():
+    save_figure(stability_map(open_netcdf(smk.input[0], STABILITY_DATASET)), list(smk.output),
+                dpi=smk.params.figures["dpi"])
+    logging.info("-> %s", list(smk.output))
+
+
+run_script(smk, main)

@@ -5,8 +5,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ureterfsi.oneway import write_wall_motion  # noqa: E402
-from ureterfsi.study import configure_logging  # noqa: E402
+from ureterfsi.workflow_log import run_script  # noqa: E402
 
-with open(snakemake.log[0], "w") as log:  # noqa: F821
-    configure_logging(log)
-    write_wall_motion(snakemake.config, snakemake.output[0])  # noqa: F821
+smk = snakemake  # noqa: F821
+run_script(smk, lambda: write_wall_motion(smk.config, smk.output[0]))

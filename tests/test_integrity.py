@@ -1,0 +1,226 @@
+"""Corrupt or foreign pipeline files fail with one line `<path>: <what is wrong>` (issue 14, part 2)."""
+from __future__ import annotations
+
+import netCDF4  # noqa: F401  (before dolfinx)
+import json
+import runpy
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import xarray as xr
+from mpi4py import MPI
+
+from test_aggregate_figures import synthetic_run
+from ureterfsi import aggregate
+from ureterfsi.checked_io import MESH_SIDECAR, BadFile, read_json
+from ureterfsi.config import load_config_files
+from ureterfsi.mesh import build_mesh, load_mesh
+from ureterfsi.provenance import FORMAT_VERSION_ATTR
+
+
+def _one_line(err, path, what):
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"{path}: "), msg
+    assert what in msg, msg
+    return msg
+
+
+@pytest.fixture
+def run_file(tmp_path, cfg):
+    p = tmp_path / "model2_coarse.nc"
+    synthetic_run(cfg, "2", end=0.5).to_netcdf(p)
+    return p
+
+
+def test_truncated_run_file_to_aggregate(run_file, cfg):
+    run_file.write_bytes(run_file.read_bytes()[:4000])
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_models([run_file], cfg)
+    _one_line(err, run_file, "truncated or corrupt netCDF")
+
+
+def test_foreign_files_to_aggregate(tmp_path, run_file, cfg):
+    text = tmp_path / "text.nc"
+    text.write_text("model,flux\n1,2\n")
+    empty = tmp_path / "empty.nc"
+    empty.write_bytes(b"")
+    with pytest.raises(BadFile) as err:
+        aggregate.open_run(text)
+    _one_line(err, text, "not a netCDF file")
+    with pytest.raises(BadFile) as err:
+        aggregate.open_run(empty)
+    _one_line(err, empty, "empty run file (0 bytes)")
+    with pytest.raises(BadFile) as err:
+        aggregate.open_run(tmp_path / "absent.nc")
+    _one_line(err, tmp_path / "absent.nc", "no such run file")
+    foreign = tmp_path / "foreign.nc"
+    xr.Dataset({"outlet_flux": ("time", np.zeros(3))}).to_netcdf(foreign)
+    with pytest.raises(BadFile) as err:
+        aggregate.open_run(foreign)
+    _one_line(err, foreign, f"without attribute '{FORMAT_VERSION_ATTR}'")
+    ds = xr.load_dataset(run_file)
+    no_model, old_format = ds.copy(), ds.copy()
+    del no_model.attrs["model"]
+    old_format.attrs[FORMAT_VERSION_ATTR] = 99
+    for d, what in ((no_model, "missing attribute 'model' of a run file"), (old_format, "in file format 99"),
+                    (ds.drop_vars("outlet_flux"), "missing variable 'outlet_flux' of a run file")):
+        p = tmp_path / f"bad{len(what)}.nc"
+        d.to_netcdf(p)
+        with pytest.raises(BadFile) as err:
+            aggregate.combine_models([p], cfg)
+        _one_line(err, p, what)
+
+
+def test_truncated_dataset_to_a_figure_script(tmp_path, repo_root, capsys):
+    ds_path, log = tmp_path / "models_coarse.nc", tmp_path / "fig04.log"
+    xr.Dataset({"x": ("t", np.zeros(100))}).to_netcdf(ds_path)
+    ds_path.write_bytes(ds_path.read_bytes()[:3000])
+    smk = SimpleNamespace(rule="fig04_outlet_flow", input=SimpleNamespace(models=str(ds_path)),
+                          output=[str(tmp_path / "f.png")], params=SimpleNamespace(figures={"dpi": 50}),
+                          log=[str(log)], config={})
+    with pytest.raises(SystemExit) as ex:
+        runpy.run_path(str(repo_root / "workflow/scripts/plot_figure.py"), init_globals={"snakemake": smk})
+    assert ex.value.code == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"rule fig04_outlet_flow: {ds_path}: truncated or corrupt netCDF") and "\n" not in err
+    text = log.read_text()
+    assert f"{ds_path}: truncated or corrupt netCDF" in text and "Traceback" not in text
+
+
+@pytest.fixture(scope="module")
+def rz_mesh(tmp_path_factory, repo_root):
+    d = tmp_path_factory.mktemp("rz")
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    build_mesh(cfg, "1", "coarse", "axisymmetric", d / "m.msh", d / "m.json")
+    return d / "m.msh", d / "m.json"
+
+
+def test_truncated_or_foreign_mesh(rz_mesh, tmp_path):
+    msh, side = rz_mesh
+    data = msh.read_bytes()
+    cases = {"truncated.msh": (data[: len(data) // 2], "truncated gmsh mesh"),
+             "text.msh": (b"hello\n", "not a gmsh mesh"),
+             "empty.msh": (b"", "empty gmsh mesh (0 bytes)"),
+             "v2.msh": (b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n", "gmsh mesh format 2.2, expected 4.1"),
+             "cut.msh": (data[: len(data) // 2] + b"\n$EndElements\n", "gmsh cannot read this mesh")}
+    for name, (content, what) in cases.items():
+        p = tmp_path / name
+        p.write_bytes(content)
+        with pytest.raises(BadFile) as err:
+            load_mesh(p, MPI.COMM_WORLD)
+        _one_line(err, p, what)
+    mesh, ct, ft = load_mesh(msh, MPI.COMM_WORLD)     # the intact mesh still loads
+    assert mesh.topology.index_map(2).size_global > 0
+
+
+def test_bad_sidecar(rz_mesh, tmp_path):
+    _, side = rz_mesh
+    info = read_json(side, MESH_SIDECAR)
+    assert info["model"] == "1"
+    cut = tmp_path / "cut.json"
+    cut.write_text(side.read_text()[:50])
+    with pytest.raises(BadFile) as err:
+        read_json(cut, MESH_SIDECAR)
+    _one_line(err, cut, "not valid JSON (line")
+    nokey = tmp_path / "nokey.json"
+    nokey.write_text(json.dumps({k: v for k, v in info.items() if k != "hole_pair_z"}))
+    with pytest.raises(BadFile) as err:
+        read_json(nokey, MESH_SIDECAR)
+    _one_line(err, nokey, "missing key 'hole_pair_z' of a mesh sidecar")
+    lst = tmp_path / "list.json"
+    lst.write_text("[1, 2]")
+    with pytest.raises(BadFile) as err:
+        read_json(lst, MESH_SIDECAR)
+    _one_line(err, lst, "a JSON list")
+
+
+# ------------------------------------------------------------------------------------ checkpoint identity
+def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root, monkeypatch, caplog):
+    """Issue 14 part 1: a run with peak_traction 5e4 stopped after its first checkpoint, then the same
+    target with 1e5: the stale checkpoint is set aside, the run starts at t = 0 and equals a clean 1e5 run."""
+    import logging
+
+    from ureterfsi.fsi import TimeIntegrator
+    from ureterfsi.study import RunSpec, run
+
+    msh, _ = rz_mesh
+    base = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    base["time"]["checkpoint_interval"] = 1
+    low, high = json.loads(json.dumps(base)), json.loads(json.dumps(base))
+    low["peristalsis"]["peak_traction"], high["peristalsis"]["peak_traction"] = 5e4, 1e5
+    spec = RunSpec("1", "coarse", "axisymmetric", str(msh), end=0.04)
+    ckpt = tmp_path / "ckpt" / "model1.npz"
+
+    save = TimeIntegrator.save_checkpoint
+
+    def save_then_stop(self, step, dt_next):
+        save(self, step, dt_next)
+        raise KeyboardInterrupt("stopped after the first checkpoint")
+
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        run(low, spec, str(tmp_path / "low.nc"), str(ckpt))
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save)
+    assert (ckpt.parent / "model1.rank0of1.npz").exists()
+
+    with caplog.at_level(logging.INFO, logger="ureterfsi"):
+        resumed = run(high, spec, str(tmp_path / "high.nc"), str(ckpt))
+    lines = [r.getMessage() for r in caplog.records if "not resumed" in r.getMessage()]
+    assert len(lines) == 1 and "written by another run (peristalsis.peak_traction 50000.0 -> 100000.0)" in lines[0]
+    assert "starting from t = 0" in lines[0] and "resumed from checkpoint" not in caplog.text
+    assert len(list(ckpt.parent.glob("model1.rank0of1.stale-*.npz"))) == 1
+    clean = run(high, spec, str(tmp_path / "clean.nc"))
+    assert resumed["time"].values[0] == 0.0
+    for name in ("max_wall_displacement", "outlet_flux", "wall_radial_displacement"):
+        np.testing.assert_allclose(resumed[name].values, clean[name].values, rtol=1e-10, atol=1e-20, err_msg=name)
+    # the same configuration does resume, and gives the clean run
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        run(high, spec, str(tmp_path / "again.nc"), str(ckpt))
+    monkeypatch.setattr(TimeIntegrator, "save_checkpoint", save)
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="ureterfsi"):
+        again = run(high, spec, str(tmp_path / "again.nc"), str(ckpt))
+    assert "resumed from checkpoint: step 1" in caplog.text and "not resumed" not in caplog.text
+    np.testing.assert_allclose(again["max_wall_displacement"].values, clean["max_wall_displacement"].values,
+                               rtol=1e-10, atol=1e-20)
+
+
+def test_solve_of_a_truncated_mesh_is_one_line_on_stderr(rz_mesh, tmp_path, repo_root, capsys):
+    from ureterfsi.study import main
+
+    msh, _ = rz_mesh
+    cut = tmp_path / "cut.msh"
+    cut.write_bytes(msh.read_bytes()[:5000])
+    code = main(["--config", str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml"),
+                 "--model", "1", "--level", "coarse", "--symmetry", "axisymmetric", "--mesh", str(cut),
+                 "--out", str(tmp_path / "out.nc")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1] == f"{cut}: truncated gmsh mesh (does not end with a closing '$End...' section tag)"
+    assert not (tmp_path / "out.nc").exists()
+
+
+def test_snakemake_rule_log_gets_the_line(tmp_path, repo_root):
+    """End to end through Snakemake: a figure rule fed a truncated dataset fails, its log holds the line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bad = tmp_path / "models_coarse.nc"
+    xr.Dataset({"x": ("t", np.zeros(100))}).to_netcdf(bad)
+    bad.write_bytes(bad.read_bytes()[:3000])
+    (tmp_path / "Snakefile").write_text(
+        "rule fig04_outlet_flow:\n"
+        f"    input: models='{bad}'\n"
+        "    output: 'fig04.png'\n"
+        "    params: figures={'dpi': 50}\n"
+        "    log: 'fig04.log'\n"
+        f"    script: '{repo_root}/workflow/scripts/plot_figure.py'\n")
+    snakemake = Path(sys.executable).with_name("snakemake")
+    proc = subprocess.run([str(snakemake), "--cores", "1", "-s", "Snakefile"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode != 0
+    text = (tmp_path / "fig04.log").read_text()
+    assert f"{bad}: truncated or corrupt netCDF" in text and "Traceback" not in text, text
+    assert f"rule fig04_outlet_flow: {bad}: truncated or corrupt netCDF" in proc.stderr
