@@ -76,7 +76,8 @@ import numpy as np
 import xarray as xr
 
 from . import tags
-from .provenance import atomic_path, provenance_attrs
+from .metadata import write_netcdf
+from .provenance import provenance_attrs
 
 log = logging.getLogger("ureterfsi.stability")
 
@@ -775,8 +776,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
 
 
 def write_case(ds: xr.Dataset, path) -> None:
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    write_netcdf(ds, path)
 
 
 # ----------------------------------------------------------------------------------------- combine
