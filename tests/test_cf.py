@@ -51,14 +51,37 @@ def test_encoding_follows_cf(tmp_path):
 
 
 OPEN = {"gci": "value/extrapolated_value carry units 'see quantity_units' (not a UDUNITS unit)",
-        "wall_motion": "the time axis needs units '<unit> since <epoch>' for compliance-checker"}
+        **{k: "the time axis needs units '<unit> since <epoch>' for compliance-checker (readers decode_times)"
+           for k in ("run", "models", "wall_motion")}}
 
 
 @pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=OPEN[k]))
-                                  if k in OPEN else k for k in ("mesh_convergence", "gci", "wall_motion")])
-def test_dataset_passes_cf_checker(kind, tmp_path):
+                                  if k in OPEN else k for k in ("run", "models", "ladder", "mesh_convergence", "gci",
+                                                                    "wall_motion")])
+def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
+    from ureterfsi.config import load_config
+
+    cfg = load_config(repo_root / "config/config.yaml")
     conv = convergence_dataset()[0]
-    if kind == "mesh_convergence":
+    if kind in ("run", "models", "ladder"):
+        from test_aggregate_figures import synthetic_run
+        from ureterfsi import aggregate, ladder
+
+        runs = {m: synthetic_run(cfg, m, end=1.0, wall_time=10.0) for m in ("1", "3")}
+        paths = {}
+        for m, run in runs.items():
+            paths[m] = tmp_path / f"run{m}.nc"
+            metadata.write_netcdf(run, paths[m])
+        if kind == "run":
+            ds = runs["3"]
+        elif kind == "models":
+            ds = aggregate.combine_models(list(paths.values()), cfg)
+        else:
+            cfg["ladder"]["end"] = 1.0
+            cfg["ladder"]["rungs"] = {r: {"fidelity": r, "symmetry": "quarter", "level": "coarse", "dt": 0.01}
+                                      for r in ("fully_coupled", "one_way")}
+            ds = ladder.ladder_dataset({"fully_coupled": paths["3"], "one_way": paths["3"]}, cfg)
+    elif kind == "mesh_convergence":
         ds = conv
     elif kind == "gci":
         ds = gci_dataset(conv)

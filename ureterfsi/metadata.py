@@ -70,7 +70,7 @@ VARIABLES = {
 }
 
 # CF standard names (CF standard name table) of the variables that have one
-STANDARD_NAMES = {"time": "time", "probe_time": "time", "step_time": "time"}
+STANDARD_NAMES = {"time": "time"}
 
 
 def cf_meta(name: str) -> tuple[str, str]:
@@ -133,7 +133,7 @@ def global_attrs(title: str) -> dict:
 
 def encoding(ds) -> dict:
     """netCDF encoding CF 1.8 checkers accept: no _FillValue on coordinate variables (and on variables
-    without missing values), int32 for 64-bit integers, bool as int8."""
+    without missing values), int32 for 64-bit integers."""
     enc = {}
     for name, var in ds.variables.items():
         e = {}
@@ -146,8 +146,6 @@ def encoding(ds) -> dict:
             if vals.size and (vals.min() < info.min or vals.max() > info.max):
                 raise ValueError(f"variable {name!r} does not fit int32 (CF 1.8 netCDF classic data types)")
             e["dtype"] = "int32"
-        elif kind == "b":
-            e["dtype"] = "int8"
         enc[name] = e
     return enc
 
