@@ -20,7 +20,8 @@ import xarray as xr
 from ureterfsi import aggregate, plotting
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
-from ureterfsi.study import CF, HOLE_FRACTION, N_HOLE, N_LINE, RunSpec, UreterProbes, probes_dataset
+from ureterfsi.metadata import VARIABLES as CF
+from ureterfsi.study import HOLE_FRACTION, N_HOLE, N_LINE, RunSpec, UreterProbes, probes_dataset
 
 FLUX_AMPLITUDE = 1e-8         # m^3/s
 VM_BASE = 5e3                 # Pa

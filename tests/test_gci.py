@@ -17,10 +17,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ureterfsi import aggregate
+from ureterfsi import aggregate, metadata
 from ureterfsi.checked_io import open_netcdf
 from ureterfsi.provenance import FORMAT_VERSION
-from ureterfsi.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size, three_grid_gci,
+from ureterfsi.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size,
+                           three_grid_gci,
                            write_gci_table)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -170,7 +171,7 @@ def convergence_dataset(cells=(60000, 140000, 320000), levels=("coarse", "medium
          "peak_stent_max_von_mises": ("level", 6e3 * (1 - 5.0 * h ** P_VM))},
         coords={"level": ("level", np.array(levels, dtype=object)), "z": ("z", z)})
     for name in list(ds.variables):
-        units, long_name = aggregate.cf_meta(str(name))
+        units, long_name = metadata.cf_meta(str(name))
         ds[name].attrs.update(units=units, long_name=long_name)
     ds.attrs.update(model="3", probe_time=1.5, levels=",".join(levels), config_hash="abc", git_commit="deadbeef",
                     created="2026-01-01T00:00:00+00:00", ureterfsi_format_version=FORMAT_VERSION, run_fine_cells=int(cells[-1]), Conventions="CF-1.8",

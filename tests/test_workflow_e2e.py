@@ -140,7 +140,7 @@ def test_every_rule_ran(e2e):
 
 def test_run_datasets(e2e):
     import netCDF4 as nc4   # noqa: F401
-    from ureterfsi.study import CF
+    from ureterfsi.metadata import VARIABLES as CF
 
     cfg = e2e.cfg
     for m in e2e.models:

@@ -23,50 +23,14 @@ import netCDF4  # noqa: F401,I001
 import numpy as np
 import xarray as xr
 
-from .checked_io import BadFile, Contract, open_netcdf
-from .provenance import atomic_path, provenance_attrs
-from .study import CF, RUN_FILE
+from .checked_io import RUN_FILE, BadFile, Contract, open_netcdf
+from .metadata import annotate, write_netcdf
+from .provenance import provenance_attrs
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
 TIME_DECIMALS = 9            # times equal to 1 ns are the same instant (probe times, union grid)
 # run attrs that are not copied per run (dataset-level metadata of the run file)
 _SKIP_RUN_ATTRS = ("Conventions", "title")
-
-EXTRA_CF = {
-    "model": ("1", "stent model number (paper Table 1)"),
-    "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),
-    "level": ("1", "mesh level (config mesh.levels)"),
-    "step": ("1", "index of the accepted time step"),
-    "hole": ("1", "index of the side hole, by axial position"),
-    "cells": ("1", "number of cells of the mesh"),
-    "dofs": ("1", "number of degrees of freedom of the monolithic system"),
-    "wall_time": ("s", "wall-clock time of the run"),
-    "processes": ("1", "number of MPI processes of the run"),
-    "peak_outlet_flux": ("m3 s-1", "maximum up to the comparison time of the outlet volumetric flow rate"),
-    "peak_stent_max_von_mises": ("Pa", "maximum up to the comparison time of the maximum von Mises stress over the stent"),
-    "peak_outlet_hole_flux": ("m3 s-1", "maximum up to the comparison time of |volumetric flow rate| through the "
-                                        "outlet-most side hole"),
-    "outlet_hole_peak_velocity": ("m s-1", "maximum |velocity along the hole axis| across the outlet-most side hole "
-                                           "at the comparison time"),
-    "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
-}
-
-
-def cf_meta(name: str) -> tuple[str, str]:
-    """(units, long_name) of a study variable or coordinate."""
-    if name in EXTRA_CF:
-        return EXTRA_CF[name]
-    if name in CF:
-        return CF[name]
-    raise KeyError(f"no CF metadata for variable {name!r}")
-
-
-def _annotate(ds: xr.Dataset) -> xr.Dataset:
-    for name in list(ds.variables):
-        units, long_name = cf_meta(str(name))
-        ds[name].attrs.update(units=units, long_name=long_name)
-    return ds
-
 
 # what the readers of the study datasets (figures, ureterfsi.gci) rely on
 MODELS_DATASET = Contract("models dataset", attrs=("mesh_level", "models"),
@@ -219,7 +183,7 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
                 hs[i, :k] = runs[m]["hole_side"].values
         coords.update(hole=("hole", np.arange(n_hole)), hole_z=(("model", "hole"), hz),
                       hole_side=(("model", "hole"), hs))
-    ds = _annotate(xr.Dataset(data_vars, coords=coords))
+    ds = annotate(xr.Dataset(data_vars, coords=coords))
     ds["outlet_hole_z"] = xr.DataArray(
         [float(runs[m].attrs.get("outlet_hole_z", np.nan)) for m in models], dims="model",
         attrs={"units": "m", "long_name": "axial position of the outlet-most side hole (Figs. 6-9)"})
@@ -296,7 +260,7 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
         coords={"level": ("level", np.array(levels, dtype=object)), "z": ("z", z)})
     ds["line_max_difference_to_finest"] = np.abs(ds["stent_von_mises_line"]
                                                  - ds["stent_von_mises_line"].isel(level=-1)).max("z")
-    ds = _annotate(ds)
+    ds = annotate(ds)
     ds["stent_von_mises_line"].attrs["long_name"] += f" at t = {time:g} s"
     attrs = {}
     for lv in levels:
@@ -312,6 +276,5 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
 
 
 def write_dataset(ds: xr.Dataset, path) -> None:
-    """netCDF output, atomically (temporary sibling renamed into place)."""
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    """CF-1.8 netCDF output, atomically (ureterfsi.metadata.write_netcdf)."""
+    write_netcdf(ds, path)

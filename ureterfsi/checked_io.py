@@ -142,3 +142,11 @@ def sha256_file(path, chunk: int = 1 << 20) -> str:
         for block in iter(lambda: fh.read(chunk), b""):
             h.update(block)
     return h.hexdigest()
+
+
+# what the readers of a run file (ureterfsi.aggregate, ureterfsi.ladder) rely on; the stent variables
+# exist only in stented runs
+RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity", "wall_time_s"),
+                    variables=("time", "z", "probe_time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity",
+                               "fluid_volume", "max_wall_displacement", "pulse_centre", "wall_radial_displacement",
+                               "step_time", "step_dt", "newton_iterations"))

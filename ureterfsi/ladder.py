@@ -100,7 +100,7 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
     from .checked_io import open_netcdf
-    from .study import RUN_FILE
+    from .checked_io import RUN_FILE
 
     runs = {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
     ref = runs[lad["reference"]]
@@ -118,7 +118,7 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
          "wall_time": ("rung", [float(runs[r].attrs["wall_time_s"]) for r in names],
                        {"units": "s", "long_name": "wall-clock time of the run"}),
          "peak_memory": ("rung", [float(runs[r].attrs.get("peak_memory_mib", np.nan)) for r in names],
-                         {"units": "MiB", "long_name": "peak resident memory of the run"}),
+                         {"units": "1048576 byte", "long_name": "peak resident memory of the run (MiB)"}),
          "cells": ("rung", [int(runs[r].attrs["cells"]) for r in names],
                    {"units": "1", "long_name": "cells of the mesh"}),
          "dofs": ("rung", [int(runs[r].attrs["dofs"]) for r in names],

@@ -356,11 +356,10 @@ def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
     """Step 1 of the rung as a job of its own: the wall over [0, time.end] in steps of time.dt, written
     atomically. Every one-way run of the study reads it (their wall is the same: geometry and load do not
     depend on the stent model or the 3D mesh)."""
-    from .provenance import atomic_path
+    from .metadata import write_netcdf
 
     ds = wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"]).to_dataset(cfg)
-    with atomic_path(out_path) as tmp:
-        ds.to_netcdf(tmp)
+    write_netcdf(ds, out_path)
     return ds
 
 
@@ -373,7 +372,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
     from .fsi.submesh import extract
     from .geometry import StentModel, UreterGeometry
     from .mesh import load_mesh
-    from .provenance import atomic_path
+    from .metadata import write_netcdf
     from .scenes.ureter import materials
     from .study import N_LINE, UreterProbes, integrate_from_rest, probes_dataset, time_settings
 
@@ -432,8 +431,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
         extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,
                      one_way_hole_diameter=g.hole_radius * 2, stent_solve_time_s=round(stent.wall_time, 2))
     ds = probes_dataset(obs, records, cfg, spec, extra, fidelity="one_way")
-    with atomic_path(out_path) as tmp:
-        ds.to_netcdf(tmp)
+    write_netcdf(ds, out_path)
     integrator.remove_checkpoint()
     log.info("done in %.1f s -> %s (max |p - p_ref| on the wall %.1f Pa vs load %.0f Pa%s)", wall, out_path,
              diag.max_wall_pressure_deviation, cfg["peristalsis"]["peak_traction"],

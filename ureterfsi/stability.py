@@ -76,7 +76,8 @@ import xarray as xr
 
 from . import tags
 from .checked_io import MESH_SIDECAR, Contract, open_netcdf, read_json
-from .provenance import atomic_path, provenance_attrs
+from .metadata import write_netcdf
+from .provenance import provenance_attrs
 
 log = logging.getLogger("ureterfsi.stability")
 
@@ -779,8 +780,7 @@ CASE_FILE = Contract("stability case file", attrs=("case",), variables=("case", 
 
 
 def write_case(ds: xr.Dataset, path) -> None:
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    write_netcdf(ds, path)
 
 
 # ----------------------------------------------------------------------------------------- combine

@@ -30,8 +30,8 @@ from .fsi import physics
 from .fsi.problem import MonolithicFSI
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
 from .probes import CellField, PointProbe, assemble_scalar, von_mises
-from .checked_io import Contract
-from .provenance import atomic_path, provenance_attrs
+from .metadata import cf_meta, write_netcdf
+from .provenance import provenance_attrs
 from .scenes.ureter import pulse_centre, ureter_scene
 
 log = logging.getLogger("ureterfsi.study")
@@ -231,47 +231,8 @@ def _allreduce_sum(comm, arr):
     return out
 
 
-# CF metadata of the dataset variables: name -> (units, long_name)
-CF = {
-    "time": ("s", "time"),
-    "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
-    "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet (kidney side), positive into the ureter"),
-    "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
-    "fluid_volume": ("m3", "volume of the urine domain"),
-    "max_wall_displacement": ("m", "maximum radial displacement of the ureter outer wall along the probe line"),
-    "stent_max_von_mises": ("Pa", "maximum von Mises stress over the stent volume"),
-    "stent_max_von_mises_x": ("m", "x of the maximum stent von Mises stress (reference configuration)"),
-    "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
-    "stent_max_von_mises_z": ("m", "z of the maximum stent von Mises stress (reference configuration)"),
-    "hole_flux": ("m3 s-1", "volumetric flow rate through each side hole, positive from the stent lumen outward"),
-    "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
-    "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
-    "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y) across the outlet-most side hole"),
-    "z": ("m", "axial position along the ureter (0 inlet, L outlet)"),
-    "probe_time": ("s", "probe time"),
-    "hole_offset": ("m", "axial distance from the centre of the outlet-most hole at mid-wall radius"),
-    "hole_z": ("m", "axial position of the side hole"),
-    "hole_side": ("1", "side of the side hole on the y axis (+1 or -1)"),
-    "pulse_centre": ("m", "axial position of the centre of the peristaltic pulse"),
-    "step_time": ("s", "time at the end of the step"),
-    "step_dt": ("s", "time step"),
-    "newton_iterations": ("1", "Newton iterations of the step"),
-    "newton_residual": ("1", "final Newton residual norm of the step"),
-    "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid mesh"),
-    "step_wall_time": ("s", "wall-clock time of the step"),
-}
-
-
-# what the readers of a run file (ureterfsi.aggregate, ureterfsi.ladder) rely on; the stent variables
-# exist only in stented runs
-RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity", "wall_time_s"),
-                    variables=("time", "z", "probe_time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity",
-                               "fluid_volume", "max_wall_displacement", "pulse_centre", "wall_radial_displacement",
-                               "step_time", "step_dt", "newton_iterations"))
-
-
 def _cf(da: xr.DataArray, name: str) -> xr.DataArray:
-    units, long_name = CF[name]
+    units, long_name = cf_meta(name)
     da.attrs.update(units=units, long_name=long_name)
     return da
 
@@ -409,8 +370,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
         "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}",
         "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)})
     if comm.rank == 0:
-        with atomic_path(out_path) as tmp:
-            ds.to_netcdf(tmp)
+        write_netcdf(ds, out_path)
     comm.Barrier()
     integrator.remove_checkpoint()
     log.info("done in %.1f s -> %s", wall, out_path)

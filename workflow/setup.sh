@@ -8,7 +8,8 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 
 # libopenblas0-pthread: MUMPS factorisations otherwise run on the reference BLAS (5-10x slower)
-debs=(python3-dolfinx python3-gmsh python3-venv python3-pip mpi-default-bin libopenblas0-pthread)
+# libudunits2-0: the units library of cfchecks (CF checker of the tests)
+debs=(python3-dolfinx python3-gmsh python3-venv python3-pip mpi-default-bin libopenblas0-pthread libudunits2-0)
 missing=()
 for p in "${debs[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ ${#missing[@]} -gt 0 ]; then

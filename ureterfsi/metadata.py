@@ -1,0 +1,160 @@
+"""Metadata of every dataset the project writes: one table of variables (UDUNITS units, long_name, CF
+standard_name), the netCDF encoding CF 1.8 accepts, the global attributes, and the atomic netCDF write.
+
+Imports no dolfinx, PETSc or MPI: post-processing and figures use it without the solver stack.
+CF 1.8: coordinate variables carry no `_FillValue` (§2.5.1); integers are written as int32 (§2.2 has no
+int64 in the classic data types the checkers accept); `time` axes carry standard_name "time" (§4.4).
+"""
+from __future__ import annotations
+
+import shlex
+import sys
+from datetime import datetime, timezone
+
+import numpy as np
+
+from .provenance import atomic_path
+
+CONVENTIONS = "CF-1.8"
+INSTITUTION = "ureterfsi project (open reproduction)"
+SOURCE = "ureterfsi: monolithic ALE fluid-structure interaction with FEniCSx (dolfinx 0.5)"
+REFERENCES = ("Numerical study of fully coupled fluid-structure interaction of stented ureter by varying the "
+              "stent side-holes (the study reproduced; text in shared/paper/stented-ureter-fsi.txt)")
+
+# name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.oneway) and the study datasets
+# (ureterfsi.aggregate)
+VARIABLES = {
+    "time": ("s", "time"),
+    "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
+    "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet (kidney side), positive into the ureter"),
+    "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
+    "fluid_volume": ("m3", "volume of the urine domain"),
+    "max_wall_displacement": ("m", "maximum radial displacement of the ureter outer wall along the probe line"),
+    "stent_max_von_mises": ("Pa", "maximum von Mises stress over the stent volume"),
+    "stent_max_von_mises_x": ("m", "x of the maximum stent von Mises stress (reference configuration)"),
+    "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
+    "stent_max_von_mises_z": ("m", "z of the maximum stent von Mises stress (reference configuration)"),
+    "hole_flux": ("m3 s-1", "volumetric flow rate through each side hole, positive from the stent lumen outward"),
+    "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
+    "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
+    "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y) across the outlet-most side hole"),
+    "z": ("m", "axial position along the ureter (0 inlet, L outlet)"),
+    "probe_time": ("s", "probe time"),
+    "hole_offset": ("m", "axial distance from the centre of the outlet-most hole at mid-wall radius"),
+    "hole_z": ("m", "axial position of the side hole"),
+    "hole_side": ("1", "side of the side hole on the y axis (+1 or -1)"),
+    "pulse_centre": ("m", "axial position of the centre of the peristaltic pulse"),
+    "step_time": ("s", "time at the end of the step"),
+    "step_dt": ("s", "time step"),
+    "newton_iterations": ("1", "Newton iterations of the step"),
+    "newton_residual": ("1", "final Newton residual norm of the step"),
+    "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid mesh"),
+    "step_wall_time": ("s", "wall-clock time of the step"),
+    "model": ("1", "stent model number (paper Table 1)"),
+    "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),
+    "level": ("1", "mesh level (config mesh.levels)"),
+    "step": ("1", "index of the accepted time step"),
+    "hole": ("1", "index of the side hole, by axial position"),
+    "cells": ("1", "number of cells of the mesh"),
+    "dofs": ("1", "number of degrees of freedom of the monolithic system"),
+    "wall_time": ("s", "wall-clock time of the run"),
+    "processes": ("1", "number of MPI processes of the run"),
+    "peak_outlet_flux": ("m3 s-1", "maximum up to the comparison time of the outlet volumetric flow rate"),
+    "peak_stent_max_von_mises": ("Pa", "maximum up to the comparison time of the maximum von Mises stress over "
+                                       "the stent"),
+    "peak_outlet_hole_flux": ("m3 s-1", "maximum up to the comparison time of |volumetric flow rate| through the "
+                                        "outlet-most side hole"),
+    "outlet_hole_peak_velocity": ("m s-1", "maximum |velocity along the hole axis| across the outlet-most side "
+                                           "hole at the comparison time"),
+    "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
+}
+
+# CF standard names (CF standard name table) of the variables that have one
+STANDARD_NAMES = {"time": "time"}
+
+
+def cf_meta(name: str) -> tuple[str, str]:
+    """(units, long_name) of a variable of the table; KeyError naming it otherwise."""
+    try:
+        return VARIABLES[name]
+    except KeyError:
+        raise KeyError(f"no CF metadata for variable {name!r} (ureterfsi.metadata.VARIABLES)") from None
+
+
+def annotate(ds, table: dict | None = None):
+    """Set units and long_name of every variable of `ds` from `table` (default VARIABLES), and the CF
+    standard_name where one exists; returns ds."""
+    table = VARIABLES if table is None else table
+    for name in list(ds.variables):
+        try:
+            units, long_name = table[str(name)]
+        except KeyError:
+            raise KeyError(f"no CF metadata for variable {name!r}") from None
+        ds[name].attrs.update(units=units, long_name=long_name)
+    return standard_names(ds)
+
+
+def standard_names(ds):
+    """Add the CF standard_name of the variables that have one (STANDARD_NAMES); returns ds."""
+    for name, sn in STANDARD_NAMES.items():
+        if name in ds.variables:
+            ds[name].attrs["standard_name"] = sn
+    return ds
+
+
+def history_entry(argv=None) -> str:
+    """'<ISO UTC time>: <command line>' (CF §2.6.2 history)."""
+    cmd = " ".join(shlex.quote(a) for a in (sys.argv if argv is None else argv))
+    return f"{datetime.now(timezone.utc).isoformat(timespec='seconds')}: {cmd}"
+
+
+def snakemake_version() -> str | None:
+    """Version of Snakemake when this process runs under it (a job script or a run: block), else None."""
+    if "snakemake" not in sys.modules:
+        return None
+    try:
+        from importlib.metadata import version
+
+        return version("snakemake")
+    except Exception:  # snakemake not installed in this interpreter
+        return None
+
+
+def global_attrs(title: str) -> dict:
+    """CF global attributes: Conventions, title, institution, source, history, references, and the
+    Snakemake version when run under Snakemake."""
+    attrs = {"Conventions": CONVENTIONS, "title": title, "institution": INSTITUTION, "source": SOURCE,
+             "history": history_entry(), "references": REFERENCES}
+    sm = snakemake_version()
+    if sm:
+        attrs["snakemake_version"] = sm
+    return attrs
+
+
+def encoding(ds) -> dict:
+    """netCDF encoding CF 1.8 checkers accept: no _FillValue on coordinate variables (and on variables
+    without missing values), int32 for 64-bit integers."""
+    enc = {}
+    for name, var in ds.variables.items():
+        e = {}
+        kind = var.dtype.kind
+        if name in ds.coords or kind not in "fc":
+            e["_FillValue"] = None
+        if kind in "iu" and var.dtype.itemsize == 8:
+            info = np.iinfo(np.int32)
+            vals = np.asarray(var.values)
+            if vals.size and (vals.min() < info.min or vals.max() > info.max):
+                raise ValueError(f"variable {name!r} does not fit int32 (CF 1.8 netCDF classic data types)")
+            e["dtype"] = "int32"
+        enc[name] = e
+    return enc
+
+
+def write_netcdf(ds, path, title: str | None = None) -> None:
+    """Write `ds` as CF-1.8 netCDF atomically: global attributes (global_attrs; the dataset's own
+    title unless `title` is given) and the CF encoding."""
+    ds = ds.copy()
+    ds.attrs.update(global_attrs(title or str(ds.attrs.get("title", "ureterfsi dataset"))))
+    standard_names(ds)
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, encoding=encoding(ds))
