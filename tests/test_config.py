@@ -44,7 +44,7 @@ BAD = [
     ("time", DELETE, "time", "required key is missing"),
     ("geometry.length", "abc", "geometry.length", "must be of type number, got str 'abc'"),
     ("models.2.stent", "yes", "models.2.stent", "must be of type boolean"),
-    ("models.2.holes", 22.5, "models.2.holes", "must be of type integer"),
+    ("models.2.holes", 22.5, "models.2.holes", "must be an integer, got the float 22.5"),
     ("geometry.ureter_wall_thickness", -0.001, "geometry.ureter_wall_thickness", "must be > 0, got -0.001"),
     ("geometry.stent_inner_diameter", 0.0, "geometry.stent_inner_diameter", "must be > 0, got 0"),
     ("fluid.density", 0.0, "fluid.density", "must be > 0"),
@@ -171,6 +171,9 @@ def test_axisymmetric_allowed_without_stents(cfg):
     cfg["ladder"]["model"] = "1"
     for rung in cfg["ladder"]["rungs"].values():
         rung["symmetry"] = "axisymmetric"
+    with pytest.raises(ConfigError, match=r"^config error: stability\.holes\.model: must be one of models \['1'\]"):
+        validate_config(copy.deepcopy(cfg))        # the side-hole cases need a stented model
+    del cfg["stability"]["axes"]["hole_elements"]
     validate_config(cfg)
 
 

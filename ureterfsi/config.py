@@ -6,9 +6,17 @@ Two layers, both reported as one line ``config error: <dotted.key>: <constraint,
    Of several violations the first by dotted key path (sorted) is reported, so the message is
    deterministic. Optional keys with a schema ``default`` are filled in place (as
    ``snakemake.utils.validate(..., set_default=True)`` would), so every consumer sees the same keys.
-2. Physical/geometric consistency (``CHECKS`` below, run in order, first failure reported): the
-   cross-key rules the schema cannot express. Each check is a small function naming the key it blames;
-   where a rule involves several keys the message quotes every value entering it.
+   An integer key is refused as a float even when integral (``15.0``): JSON Schema's ``integer`` accepts
+   15.0, but a float where a count is meant reaches the engine as a float.
+2. Physical/geometric consistency (``CHECKS`` below, run in order, first failure reported): plausible
+   magnitudes first (``ureterfsi.plausibility``: a value outside its range is most often a unit slip),
+   then the cross-key rules the schema cannot express. Each check is a small function naming the key it
+   blames; where a rule involves several keys the message quotes every value entering it.
+
+Files are read by ``read_yaml`` (PyYAML's safe loader, YAML 1.1 as Snakemake reads them), which also refuses
+what that loader lets through silently: a key given twice in one mapping, a decimal comma in a flow mapping
+(``{s: 0,005}`` reads as ``{s: 0, 5: null}``) or sequence, a leading-zero integer (``010`` is octal 8); a
+syntax error is reported as ``file:line:column``.
 
     python -m ureterfsi.config check config/config.yaml [overlay.yaml ...]
 """
@@ -24,6 +32,7 @@ from pathlib import Path
 import yaml
 
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.plausibility import SHEAR_MODULUS, Range, range_of, unit_slip
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
@@ -37,6 +46,7 @@ MIN_ELEMENTS = {"hole": "hole_diameter", "stent_wall": "stent_wall_thickness",  
                 "ureter_wall": "ureter_wall_thickness"}
 START_WIDTHS = 3.0               # pulse centre may start at most 3 widths upstream of the inlet
 MIN_BULK_RATIO = 10.0            # kappa / (C10 + C01) >= 10: nearly incompressible (paper §2.3.2)
+MIN_GAP_ELEMENTS = 2.0           # fluid-bulk elements across the narrowest fluid gap, at the coarsest level
 
 
 class ConfigError(ValueError):
@@ -105,6 +115,7 @@ def _fill_defaults(node, schema: dict) -> None:
 # YAML 1.2 (and JSON) read 5.0e4 as a number; PyYAML, and with it Snakemake's config loader, implement
 # YAML 1.1, whose float syntax needs a dot and a signed exponent, so 5.0e4 arrives as the string '5.0e4'.
 _YAML12_FLOAT = re.compile(r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?")
+_DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+")
 
 
 def _resolve(schema: dict, root: dict) -> dict:
@@ -146,7 +157,13 @@ def _schema_message(err) -> tuple[str, str]:
                    f"keys must match {' or '.join(patterns)}")
         return _dotted(path + [extra[0]]), f"unknown key (misspelt?); {allowed}"
     if v == "type":
-        return _dotted(path), f"must be of type {val}, got {type(inst).__name__} {_fmt(inst)}"
+        if val == "integer" and isinstance(inst, float):
+            fix = f": write {int(inst)}" if inst.is_integer() else ""
+            return _dotted(path), f"must be an integer, got the float {inst!r}{fix}"
+        hint = ""
+        if val == "number" and isinstance(inst, str) and _DECIMAL_COMMA.fullmatch(inst.strip()):
+            hint = f" (decimal comma? write {inst.strip().replace(',', '.')})"
+        return _dotted(path), f"must be of type {val}, got {type(inst).__name__} {_fmt(inst)}{hint}"
     ops = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}
     if v in ops:
         return _dotted(path), f"must be {ops[v]} {_fmt(val)}, got {_fmt(inst)}"
@@ -161,11 +178,18 @@ def _schema_message(err) -> tuple[str, str]:
     return _dotted(path), err.message
 
 
-def _validate_schema(cfg: dict) -> None:
-    from jsonschema import Draft202012Validator
+@lru_cache(maxsize=1)
+def _validator():
+    """Draft 2020-12 validator of the schema whose ``integer`` excludes floats (JSON Schema accepts 15.0)."""
+    from jsonschema import Draft202012Validator, validators
 
-    schema = load_schema()
-    errors = [_schema_message(e) for e in Draft202012Validator(schema).iter_errors(cfg)]
+    checker = Draft202012Validator.TYPE_CHECKER.redefine(
+        "integer", lambda _, inst: isinstance(inst, int) and not isinstance(inst, bool))
+    return validators.extend(Draft202012Validator, type_checker=checker)(load_schema())
+
+
+def _validate_schema(cfg: dict) -> None:
+    errors = [_schema_message(e) for e in _validator().iter_errors(cfg)]
     if errors:
         key, text = min(errors, key=lambda kt: (kt[0].split("."), kt[1]))
         raise ConfigError(key, text)
@@ -176,6 +200,33 @@ def _validate_schema(cfg: dict) -> None:
 
 def _geom(cfg) -> UreterGeometry:
     return UreterGeometry.from_config(cfg)
+
+
+def _leaves(node, path=()):
+    """(dotted key, value) of every number in the configuration, in its order."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _leaves(v, path + (k,))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _leaves(v, path + (i,))
+    elif isinstance(node, (int, float)) and not isinstance(node, bool):
+        yield _dotted(path), node
+
+
+def _implausible(value: float, rng: Range) -> str:
+    units = "" if rng.units == "1" else f" {rng.units}"
+    slip = unit_slip(value, rng)
+    return (f"{_fmt(float(value))}{units} is outside the plausible range [{rng.low:g}, {rng.high:g}]{units} "
+            f"({rng.reason}){'; ' + slip if slip else ''}")
+
+
+def check_plausible(cfg):
+    """Every magnitude within its plausible range (ureterfsi.plausibility.RANGES)."""
+    for key, value in _leaves(cfg):
+        rng = range_of(key)
+        if rng is not None and not rng.low <= value <= rng.high:
+            raise ConfigError(key, _implausible(value, rng))
 
 
 def check_ureter_wall(cfg):
@@ -232,9 +283,15 @@ def check_model_keys(cfg):
         raise ConfigError("models", f"model keys must be \"1\"..\"{len(keys)}\" without gaps, got {keys}")
 
 
+def _pairs(L: float, s: float) -> int:
+    """Hole pairs at spacing s spanning a segment of length L end to end: floor(L/s) + 1 (Table 1)."""
+    return math.floor(L / s + 1e-9) + 1
+
+
 def check_models(cfg):
     L, geo = cfg["geometry"]["length"], _geom(cfg)
     d = cfg["geometry"]["hole_diameter"]
+    stented = []
     for name in sorted(cfg["models"], key=int):
         m, key = cfg["models"][name], f"models.{name}"
         s, holes = m["hole_pair_spacing"], m["holes"]
@@ -251,7 +308,23 @@ def check_models(cfg):
             raise ConfigError(f"{key}.holes",
                               f"must be a positive even number (holes come in radial pairs) for a stented model, "
                               f"got {holes}")
-        n = math.floor(L / s + 1e-9) + 1
+        stented.append(name)
+    # (n-1)s <= L < ns for n pairs at spacing s: when several models miss it but agree on an interval of L,
+    # the length is what is wrong, not their hole counts
+    off = [n for n in stented if cfg["models"][n]["holes"] // 2 != _pairs(L, cfg["models"][n]["hole_pair_spacing"])]
+    lo = max(((cfg["models"][n]["holes"] // 2 - 1) * cfg["models"][n]["hole_pair_spacing"] for n in stented),
+             default=0.0)
+    hi = min((cfg["models"][n]["holes"] // 2 * cfg["models"][n]["hole_pair_spacing"] for n in stented),
+             default=math.inf)
+    if len(off) >= 2 and lo < hi:
+        raise ConfigError("geometry.length",
+                          f"{_fmt(L)} m contradicts the hole counts of models {', '.join(off)}: n pairs at spacing s "
+                          f"span the segment end to end, (n-1)s <= L < ns (Table 1), which every stented model "
+                          f"meets for L in [{_fmt(lo)}, {_fmt(hi)}) m")
+    for name in stented:
+        m, key = cfg["models"][name], f"models.{name}"
+        s, holes = m["hole_pair_spacing"], m["holes"]
+        n = _pairs(L, s)
         if holes // 2 != n:
             raise ConfigError(f"{key}.holes",
                               f"{holes} holes = {holes // 2} pairs, but spacing {_fmt(s)} m over length {_fmt(L)} m "
@@ -327,6 +400,24 @@ def check_resolution(cfg):
                                   f"(mesh.resolution_minima.{size_key})")
 
 
+def check_fluid_bulk(cfg):
+    """The fluid-bulk element fits the lumen: >= MIN_GAP_ELEMENTS across the narrowest fluid gap (stent to
+    ureter wall; the lumen radius if no model has a stent) at the coarsest level."""
+    geo, sizes, levels = _geom(cfg), cfg["mesh"]["sizes"], cfg["mesh"]["levels"]
+    stented = any(m["stent"] for m in cfg["models"].values())
+    gap = geo.ureter_inner_radius - (geo.stent_outer_radius if stented else 0.0)
+    name = max(levels, key=lambda n: levels[n]["size_factor"])
+    f = levels[name]["size_factor"]
+    n = gap / (sizes["fluid_bulk"] * f)
+    if not n >= MIN_GAP_ELEMENTS * (1 - RTOL):
+        what = "ureter inner radius - stent outer radius" if stented else "ureter inner radius"
+        raise ConfigError("mesh.sizes.fluid_bulk",
+                          f"at level '{name}' (size_factor {_fmt(f)}) the fluid gap {_fmt(gap)} m ({what}) / "
+                          f"(mesh.sizes.fluid_bulk * size_factor) = {_fmt(gap)} / ({_fmt(sizes['fluid_bulk'])} * "
+                          f"{_fmt(f)}) = {n:.3g} elements; need >= {_fmt(MIN_GAP_ELEMENTS)} (an element must fit "
+                          f"the lumen)")
+
+
 def check_symmetry(cfg):
     if cfg["mesh"]["symmetry"] == "axisymmetric":
         stented = [n for n in sorted(cfg["models"], key=int) if cfg["models"][n]["stent"]]
@@ -352,6 +443,9 @@ def check_ureter_material(cfg):
         raise ConfigError("ureter.c10",
                           f"Mooney-Rivlin initial shear modulus 2(c10 + c01) must be > 0, got 2({_fmt(u['c10'])} + "
                           f"{_fmt(u['c01'])}) = {_fmt(mu0)} Pa")
+    if not SHEAR_MODULUS.low <= mu0 <= SHEAR_MODULUS.high:
+        raise ConfigError("ureter.c10", f"Mooney-Rivlin initial shear modulus 2(c10 + c01) = 2({_fmt(u['c10'])} + "
+                                        f"{_fmt(u['c01'])}): {_implausible(mu0, SHEAR_MODULUS)}")
     ratio = u["bulk_modulus"] / (u["c10"] + u["c01"])
     if not ratio >= MIN_BULK_RATIO:
         raise ConfigError("ureter.bulk_modulus",
@@ -370,6 +464,15 @@ def check_study(cfg):
     if not any(abs(st["convergence_time"] - t) < 1e-12 for t in cfg["time"]["probe_times"]):
         raise ConfigError("study.convergence_time", f"must be one of time.probe_times "
                                                     f"{_fmt(cfg['time']['probe_times'])}, got {_fmt(st['convergence_time'])}")
+
+
+def check_memory_levels(cfg):
+    levels = cfg["mesh"]["levels"]
+    for fidelity in ("one_way", "fully_coupled"):
+        for level in cfg["study"]["memory_mb"][fidelity]:
+            if level not in levels:
+                raise ConfigError(f"study.memory_mb.{fidelity}.{level}",
+                                  f"must be a key of mesh.levels {list(levels)} (misspelt?)")
 
 
 def check_runs(cfg):
@@ -415,11 +518,54 @@ def check_figures(cfg):
                                                   f"got {_fmt(f['domain_model'])}")
 
 
+def check_stability(cfg):
+    """The `stability` section names existing levels and models fit for its scenes (ureterfsi.stability):
+    the r-z scene a stent-free model, the hole_elements axis a model with side holes; distinct case names."""
+    st = cfg.get("stability")
+    if st is None:
+        return
+    from ureterfsi.stability import Case
+
+    levels, models = cfg["mesh"]["levels"], cfg["models"]
+    if st["level"] not in levels:
+        raise ConfigError("stability.level", f"mesh level {st['level']!r} is not one of mesh.levels {list(levels)}")
+    for i, level in enumerate(st["axes"].get("mesh_level", [])):
+        if level not in levels:
+            raise ConfigError(f"stability.axes.mesh_level[{i}]",
+                              f"mesh level {level!r} is not one of mesh.levels {list(levels)}")
+    if st["model"] not in models:
+        raise ConfigError("stability.model", f"must be one of models {sorted(models, key=int)}, got {st['model']!r}")
+    if models[st["model"]]["stent"]:
+        raise ConfigError("stability.model", f"model {st['model']!r} has a stent: the r-z (axisymmetric) scene "
+                                             f"needs a stent-free model")
+    if st["axes"].get("hole_elements"):
+        model = st["holes"]["model"]
+        if model not in models:
+            raise ConfigError("stability.holes.model", f"must be one of models {sorted(models, key=int)}, "
+                                                       f"got {model!r}")
+        if not (models[model]["stent"] and models[model]["holes"]):
+            raise ConfigError("stability.holes.model", f"model {model!r} has no side holes: the hole_elements "
+                                                       f"axis needs a stented model with holes")
+    for i, dt in enumerate(st["axes"].get("time_step", [])):
+        if not dt < st["end"]:
+            raise ConfigError(f"stability.axes.time_step[{i}]",
+                              f"must be < stability.end = {_fmt(st['end'])} s, got {_fmt(dt)}")
+    seen = {"baseline": "the baseline"}
+    for axis, values in st["axes"].items():
+        for i, v in enumerate(values):
+            key, name = f"stability.axes.{axis}[{i}]", Case(axis, v).name
+            if name in seen:
+                raise ConfigError(key, f"{_fmt(v)} gives the case name {name!r} of {seen[name]} (values are "
+                                       f"named to 3 significant digits)")
+            seen[name] = f"stability.axes.{axis}[{i}]"
+
+
 CHECKS = (
+    check_plausible,
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
-    check_symmetry, check_peristalsis, check_ureter_material, check_study, check_runs, check_ladder,
-    check_figures,
+    check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
+    check_memory_levels, check_runs, check_ladder, check_figures, check_stability,
 )
 
 
@@ -460,17 +606,105 @@ def deep_merge(base: dict, overrides: dict) -> dict:
     return out
 
 
-def _read_yaml(path) -> dict:
+_INT_TAG, _NULL_TAG, _MERGE_TAG = "tag:yaml.org,2002:int", "tag:yaml.org,2002:null", "tag:yaml.org,2002:merge"
+_LEADING_ZERO = re.compile(r"[-+]?0[0-9_]+")   # YAML 1.1: 010 is octal 8, 09 a string
+
+
+def _plain_number(node) -> bool:
+    return (isinstance(node, yaml.ScalarNode) and node.style is None
+            and node.tag in (_INT_TAG, "tag:yaml.org,2002:float"))
+
+
+def _where(name: str, node) -> str:
+    return f"{name}:{node.start_mark.line + 1}"
+
+
+def _comma_between(text: str, a, b) -> bool:
+    return text[a.end_mark.index:b.start_mark.index].strip() == ","
+
+
+def _check_nodes(node, path: tuple, name: str, text: str) -> None:
+    """Refuse what PyYAML reads silently: duplicate keys, decimal commas in flow style, leading-zero ints."""
+    if isinstance(node, yaml.MappingNode):
+        seen, prev = {}, None
+        for knode, vnode in node.value:
+            if knode.tag == _MERGE_TAG:
+                _check_nodes(vnode, path, name, text)
+                continue
+            if not isinstance(knode, yaml.ScalarNode):
+                _check_nodes(vnode, path + ("?",), name, text)
+                continue
+            if (node.flow_style and prev is not None and _plain_number(prev[1]) and knode.style is None
+                    and re.fullmatch(r"[0-9]+", knode.value) and vnode.tag == _NULL_TAG and vnode.value == ""
+                    and _comma_between(text, prev[1], knode)):
+                raise ConfigError(_dotted(path + (prev[0],)),
+                                  f"decimal comma in {prev[1].value},{knode.value} ({_where(name, knode)}): write "
+                                  f"{prev[1].value}.{knode.value} (in a {{...}} mapping a comma separates entries)")
+            ident = (knode.tag, knode.value)
+            if ident in seen:
+                raise ConfigError(_dotted(path + (knode.value,)),
+                                  f"key given twice ({seen[ident]} and {_where(name, knode)}); YAML keeps the "
+                                  f"second silently: remove one")
+            seen[ident] = _where(name, knode)
+            _check_nodes(vnode, path + (knode.value,), name, text)
+            prev = (knode.value, vnode)
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            if (node.flow_style and i and _plain_number(node.value[i - 1]) and _plain_number(item)
+                    and item.tag == _INT_TAG and _LEADING_ZERO.fullmatch(item.value)
+                    and _comma_between(text, node.value[i - 1], item)):
+                a = node.value[i - 1].value
+                raise ConfigError(_dotted(path + (i - 1,)),
+                                  f"decimal comma in {a},{item.value} ({_where(name, item)}): write {a}.{item.value} "
+                                  f"(in a [...] list a comma separates entries)")
+            _check_nodes(item, path + (i,), name, text)
+    elif (isinstance(node, yaml.ScalarNode) and node.style is None and node.tag == _INT_TAG
+          and _LEADING_ZERO.fullmatch(node.value)):
+        raise ConfigError(_dotted(path), f"{node.value} has a leading zero, which YAML 1.1 reads as an octal "
+                                         f"number ({_where(name, node)}): write {node.value.lstrip('0') or '0'}")
+
+
+def read_yaml(path) -> dict:
+    """The mapping of a YAML file as Snakemake reads it (PyYAML safe loader), refusing syntax errors (as
+    file:line:column), duplicate keys, decimal commas in flow style and leading-zero integers."""
+    name = str(path)
     try:
-        data = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise ConfigError(str(path), f"cannot read YAML: {exc}") from None
-    return {} if data is None else data
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise ConfigError(name, "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(name, f"cannot read the file: {exc}") from None
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return {}
+        _check_nodes(node, (), name, text)
+        data = loader.construct_document(node)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"{name}:{mark.line + 1}:{mark.column + 1}" if mark else name
+        detail = "; ".join(str(x) for x in (exc.context, exc.problem) if x)
+        raise ConfigError(where, f"YAML syntax error: {detail}") from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(name, f"YAML error: {exc}") from None
+    finally:
+        loader.dispose()
+    if not isinstance(data, dict):
+        raise ConfigError(name, f"must be a YAML mapping of sections, got {type(data).__name__}")
+    return data
+
+
+def schema_defaults(section: str) -> dict:
+    """The schema's defaults of a top-level section, as validate_config fills them in."""
+    out: dict = {}
+    _fill_defaults(out, load_schema()["properties"][section])
+    return out
 
 
 def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> dict:
     """Read a YAML file (or copy a dict), deep-merge `overrides`, validate and return the config."""
-    base = copy.deepcopy(path_or_dict) if isinstance(path_or_dict, dict) else _read_yaml(path_or_dict)
+    base = copy.deepcopy(path_or_dict) if isinstance(path_or_dict, dict) else read_yaml(path_or_dict)
     if not isinstance(base, dict):
         raise ConfigError("<root>", f"must be a mapping, got {type(base).__name__}")
     cfg = deep_merge(base, overrides) if overrides else base
@@ -480,12 +714,9 @@ def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> d
 
 def load_config_files(paths) -> dict:
     """Load a configuration file with overlay files deep-merged on top, in order, and validate."""
-    cfg = _read_yaml(paths[0])
+    cfg = read_yaml(paths[0])
     for overlay in paths[1:]:
-        extra = _read_yaml(overlay)
-        if not isinstance(extra, dict) or not isinstance(cfg, dict):
-            raise ConfigError(str(overlay), "overlay and configuration must be mappings")
-        cfg = deep_merge(cfg, extra)
+        cfg = deep_merge(cfg, read_yaml(overlay))
     return load_config(cfg)
 
 

@@ -76,6 +76,7 @@ import xarray as xr
 
 from . import tags
 from .checked_io import MESH_SIDECAR, Contract, open_netcdf, read_json
+from .config import check_stability, deep_merge, schema_defaults
 from .metadata import write_netcdf
 from .provenance import provenance_attrs
 
@@ -105,9 +106,6 @@ AXIS_PARAMETER = {"time_step": "time_step", "mesh_level": "cells", "bulk_ratio":
 ROWS = {"velocity": "momentum (velocity)", "displacement": "kinematic / mesh-motion (displacement)",
         "pressure": "continuity (fluid pressure)", "solid_pressure": "volumetric constraint (solid pressure)"}
 LIMITS = ("none", "newton", "nan", "ale_inversion", "energy", "volume", "wall_time", "exception")
-DEFAULTS = {"model": "1", "level": "coarse", "end": 3.0, "energy_safety": 10.0, "volume_tolerance": 0.01,
-            "min_ale_jacobian": 0.0, "max_wall_time": 3600.0, "holes": {"model": "4", "symmetry": "quarter"},
-            "axes": {}}
 SCENES = {"rz": "r-z (axisymmetric), fully coupled monolithic ALE, P2-P2-P1-P0, BDF2",
           "holes": "3D, one-way: r-z wall -> urine alone on the fluid submesh (ALE P2-P1, segregated mesh "
                    "motion, BDF2), stent rigid"}
@@ -145,10 +143,8 @@ def format_value(value) -> str:
 
 
 def settings(cfg: dict) -> dict:
-    """The `stability` section of cfg with the module defaults filled in."""
-    out = deepcopy(DEFAULTS)
-    out.update(deepcopy(cfg.get("stability") or {}))
-    return out
+    """The `stability` section of cfg with the schema's defaults filled in (no section: the baseline alone)."""
+    return deep_merge({"axes": {}} | schema_defaults("stability"), cfg.get("stability") or {})
 
 
 def cases(cfg: dict) -> list[Case]:
@@ -156,13 +152,7 @@ def cases(cfg: dict) -> list[Case]:
     st = settings(cfg)
     out = [Case("baseline")]
     for axis, values in st["axes"].items():
-        if axis not in AXES:
-            raise ValueError(f"stability.axes.{axis}: unknown axis; one of {', '.join(AXES)}")
         out += [Case(axis, v if axis == "mesh_level" else float(v)) for v in values]
-    names = [c.name for c in out]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise ValueError(f"stability.axes: duplicate cases {dup}")
     return out
 
 
@@ -174,7 +164,9 @@ def case_by_name(cfg: dict, name: str) -> Case:
 
 
 def case_setup(cfg: dict, case: Case) -> dict:
-    """Configuration of one case: {"cfg": modified copy, "dt", "level", "end", "parameters": {...}}."""
+    """Configuration of one case: {"cfg": modified copy, "dt", "level", "end", "parameters": {...}}.
+
+    A `stability` section that ureterfsi.config.check_stability refuses raises its ConfigError."""
     st = settings(cfg)
     c = deepcopy(cfg)
     dt, level, end = float(cfg["time"]["dt"]), str(st["level"]), float(st["end"])
@@ -216,19 +208,7 @@ def case_setup(cfg: dict, case: Case) -> dict:
                                        g["stent_wall_thickness"] / (sizes["stent_wall"] * f_level))
     elif case.axis != "baseline":
         raise ValueError(f"unknown stability axis {case.axis!r}; one of baseline, {', '.join(AXES)}")
-    if level not in cfg["mesh"]["levels"]:
-        raise ValueError(f"stability case {case.name}: mesh level {level!r} is not one of mesh.levels "
-                         f"{list(cfg['mesh']['levels'])}")
-    if model not in cfg["models"]:
-        raise ValueError(f"stability case {case.name}: model {model!r} is not one of models {list(cfg['models'])}")
-    if scene == "rz" and cfg["models"][model]["stent"]:
-        raise ValueError(f"stability.model {model!r} has a stent: the r-z (axisymmetric) model needs a "
-                         f"stent-free model")
-    if scene == "holes" and not (cfg["models"][model]["stent"] and cfg["models"][model]["holes"]):
-        raise ValueError(f"stability.holes.model {model!r} has no side holes: the hole_elements axis needs a "
-                         f"stented model with holes")
-    if scene == "holes" and symmetry == "axisymmetric":
-        raise ValueError("stability.holes.symmetry: side holes need a 3D mesh (full, half or quarter)")
+    check_stability(cfg)
     params = {"time_step": dt, "mesh_level": level, "bulk_ratio": u["bulk_modulus"] / (u["c10"] + u["c01"]),
               "density_ratio": u["density"] / f["density"], "peak_traction": p["peak_traction"],
               "wave_speed": p["speed"], "wave_width": p["width"], "dynamic_viscosity": f["dynamic_viscosity"],
