@@ -369,6 +369,7 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
     wall_motion dataset (write_wall_motion) to read instead of solving the wall."""
     from mpi4py import MPI
 
+    from .fields import field_writer, oneway_parts
     from .fsi.submesh import extract
     from .geometry import StentModel, UreterGeometry
     from .mesh import load_mesh
@@ -408,10 +409,13 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
     obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
                        stent=stent)
     diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)
-    integrator = integrate_from_rest(pb, settings, [obs, diag], cfg["fluid"]["reference_pressure"])
+    fields = field_writer(cfg, out_path, lambda q: oneway_parts(pb, stent, q), settings.end, comm)
+    integrator = integrate_from_rest(pb, settings, [obs, diag] + ([fields] if fields else []),
+                                     cfg["fluid"]["reference_pressure"])
     records = integrator.records
+    field_attrs = fields.finish(out_path) if fields else {}
     wall = _time.perf_counter() - wall0
-    extra = {
+    extra = field_attrs | {
         "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
         "solver": (f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "

@@ -28,6 +28,7 @@ from . import tags
 from .fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
 from .fsi import physics
 from .fsi.problem import MonolithicFSI
+from .fields import coupled_parts, field_writer
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
 from .probes import CellField, PointProbe, assemble_scalar, von_mises
 from .metadata import cf_meta, write_netcdf
@@ -361,10 +362,14 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
              spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
     settings = time_settings(cfg, spec, checkpoint_path)
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
-    integrator = integrate_from_rest(pb, settings, [obs], cfg["fluid"]["reference_pressure"])
+    fields = field_writer(cfg, out_path, lambda q: coupled_parts(pb, obs.stent if obs.has_stent else None, q),
+                          settings.end, comm)
+    integrator = integrate_from_rest(pb, settings, [obs] + ([fields] if fields else []),
+                                     cfg["fluid"]["reference_pressure"])
     records = integrator.records
+    field_attrs = fields.finish(out_path) if fields else {}
     wall = _time.perf_counter() - wall0
-    ds = probes_dataset(obs, records, cfg, spec, {
+    ds = probes_dataset(obs, records, cfg, spec, field_attrs | {
         "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
         "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}",

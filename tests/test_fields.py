@@ -1,0 +1,74 @@
+"""Field files (ureterfsi.fields): a one-way run of the 10 mm segment (model 3, two 20 ms steps) writes XDMF
+snapshots at its probe times; read back without dolfinx, they match the run's own diagnostics exactly."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi/__init__.py)
+import numpy as np
+import pytest
+import xarray as xr
+
+from ureterfsi.config import load_config_files
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("fields")
+    cfg = load_config_files([REPO / "config" / "config.yaml", REPO / "tests" / "data" / "mini-ureter.yaml"])
+    cfg["time"].update(end=0.04, dt=0.02, probe_times=[0.02, 0.04])
+    cfg["peristalsis"]["ramp_time"] = 0.039
+    cfg["figures"].update(wave_times=[0.02, 0.04], hole_velocity_times=[0.02, 0.04, 0.02, 0.04])
+    (tmp / "cfg.json").write_text(json.dumps(cfg, default=float))
+    from ureterfsi.mesh import build_mesh
+
+    build_mesh(cfg, "3", "coarse", "quarter", tmp / "m3.msh", tmp / "m3.json")
+    out = tmp / "runs" / "one_way" / "quarter" / "model3_coarse.nc"
+    subprocess.run([sys.executable, "-m", "ureterfsi.study", "--config-json", str(tmp / "cfg.json"), "--model", "3",
+                    "--level", "coarse", "--symmetry", "quarter", "--mesh", str(tmp / "m3.msh"), "--out", str(out),
+                    "--fidelity", "one_way"], check=True, cwd=REPO, capture_output=True)
+    with xr.open_dataset(out) as ds:
+        ds.load()
+    return ds, out, cfg
+
+
+def test_field_files_referenced_from_dataset(run):
+    ds, out, _ = run
+    d = (out.parent / ds.attrs["fields_path"]).resolve()
+    assert d == (out.parent.parent.parent.parent / "fields" / "one_way" / "quarter" / "model3_coarse").resolve()
+    manifest = json.loads((d / "fields.json").read_text())
+    assert manifest["times"] == [0.02, 0.04] and set(manifest["parts"]) == {"urine", "stent"}
+    assert ds.attrs["fields_size_bytes"] == sum(f.stat().st_size for f in d.iterdir() if f.name != "fields.json")
+    assert not list(d.parent.glob("*.part"))          # staging directory renamed into place
+    assert 0 < ds.attrs["fields_write_time_s"] < 0.05 * ds.attrs["wall_time_s"]
+
+
+def test_wall_pressure_matches_run_diagnostic(run):
+    """max over snapshots and wall vertices of |p - p_ref| = the run's one_way_max_wall_pressure_deviation
+    (both: P1 pressure dofs on the fluid-ureter interface, every step of this run is a snapshot)."""
+    from ureterfsi.plotting_fields import read_fields
+
+    ds, out, cfg = run
+    fs = read_fields(out.parent / ds.attrs["fields_path"], "urine")
+    R = np.hypot(fs.points[:, 0], fs.points[:, 1])
+    wall = np.abs(R - cfg["geometry"]["ureter_outer_diameter"] / 2 + cfg["geometry"]["ureter_wall_thickness"]) < 1e-7
+    assert wall.sum() > 100
+    dev = max(np.abs(fs.values("pressure", t)[wall, 0] - cfg["fluid"]["reference_pressure"]).max() for t in fs.times)
+    assert dev == pytest.approx(ds.attrs["one_way_max_wall_pressure_deviation"], rel=1e-12)
+    assert fs.units["pressure"] == "Pa"
+
+
+def test_stent_von_mises_cell_means_bounded_by_run_maximum(run):
+    """DG0 cell means of the stent stress never exceed the run's maximum of the DG1 field, and reach most of it."""
+    from ureterfsi.plotting_fields import read_fields
+
+    ds, out, _ = run
+    fs = read_fields(out.parent / ds.attrs["fields_path"], "stent")
+    for t, vmax in zip(ds["time"].values[1:], ds["stent_max_von_mises"].values[1:]):
+        vm = fs.values("von_mises", float(t))[:, 0]
+        assert vm.size == len(fs.cells) and vm.max() <= vmax * (1 + 1e-12) and vm.max() > 0.5 * vmax
