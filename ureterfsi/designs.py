@@ -347,3 +347,134 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
             if p.wall_id == wall_id:
                 return p.config
     raise KeyError(f"no design point uses wall motion {wall_id}")
+
+
+# ------------------------------------------------------------------------------------------ runs
+
+def solve_point(cfg: dict, study: Study, point: Point, mesh: str, out: str, checkpoint: str | None,
+                wall: str | None) -> None:
+    """One design point's solve on its rung (serial): ureterfsi.oneway.run on the shared wall motion, or
+    ureterfsi.study.run fully coupled."""
+    from .study import RunSpec
+
+    spec = RunSpec(study.model, study.level, study.symmetry, mesh)
+    if study.rung == "one_way":
+        from . import oneway
+
+        oneway.run(point.config, spec, out, checkpoint, wall_path=wall)
+    else:
+        from .study import run
+
+        run(point.config, spec, out, checkpoint)
+
+
+# ------------------------------------------------------------------------------------------ dataset
+SCALARS = {
+    "peak_outlet_flux": ("m3 s-1", "maximum over time of the outlet volumetric flow rate"),
+    "mean_outlet_flux": ("m3 s-1", "time mean of the outlet volumetric flow rate over the run"),
+    "backflow_volume": ("m3", "volume flowing back in through the outlet, integral of max(-Q_out, 0) dt"),
+    "peak_hole_flux": ("m3 s-1", "maximum over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_volume": ("m3", "integral over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "
+                                    "the volume through the outlet, integral |Q_out| dt"),
+    "peak_stent_von_mises": ("Pa", "maximum over time and the stent of the von Mises stress"),
+    "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
+    "wall_time": ("s", "wall-clock time of the point's solve"),
+}
+SERIES = ("outlet_flux", "inlet_flux", "stent_max_von_mises", "max_wall_displacement")
+
+
+def _trapz(y: np.ndarray, t: np.ndarray) -> float:
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
+
+
+def point_scalars(run) -> dict:
+    """The scalars of one run dataset (ureterfsi.study.probes_dataset); hole flows per hole."""
+    t = run["time"].values.astype(float)
+    q = run["outlet_flux"].values.astype(float)
+    hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((t.size, 0))
+    # the quarter model records the +y hole of each pair; the -y hole carries the same flow by symmetry
+    mirror = 2.0 if hole.shape[1] and np.all(run["hole_side"].values > 0) else 1.0
+    exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
+    return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
+            "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
+            "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
+            "hole_exchange_volume": exchange,
+            "hole_exchange_fraction": mirror * exchange.sum() / _trapz(np.abs(q), t),
+            "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
+            "peak_wall_displacement": float(run["max_wall_displacement"].max()),
+            "wall_time": float(run.attrs.get("wall_time_s", np.nan))}
+
+
+def study_dataset(cfg: dict, name: str, paths: dict):
+    """Dataset of a study from its run files {point id: path} (see the module docstring)."""
+    import xarray as xr
+
+    from .provenance import provenance_attrs
+    from .study import CF
+
+    st = studies(cfg)[name]
+    runs = {}
+    for p in st.points:
+        with xr.open_dataset(paths[p.id]) as ds:
+            runs[p.id] = ds.load()
+    tc = cfg["time"]
+    t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
+    n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
+    n = len(st.points)
+    data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
+    series = {k: np.full((n, t.size), np.nan) for k in SERIES}
+    hole_series, hole_z = np.full((n, t.size, n_hole), np.nan), np.full((n, n_hole), np.nan)
+    for i, p in enumerate(st.points):
+        r = runs[p.id]
+        for k, v in point_scalars(r).items():
+            data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
+        rt = r["time"].values.astype(float)
+        for k in SERIES:
+            if k in r:
+                series[k][i] = np.interp(t, rt, r[k].values, left=np.nan, right=np.nan)
+        for j in range(r.sizes.get("hole", 0)):
+            hole_series[i, :, j] = np.interp(t, rt, r["hole_flux"].values[:, j], left=np.nan, right=np.nan)
+            hole_z[i, j] = float(r["hole_z"].values[j])
+    vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
+    vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
+    vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
+    coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
+              "hole_z": (("design", "hole"), hole_z)}
+    coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
+    ds = xr.Dataset(vars_, coords=coords)
+    meta = SCALARS | {k: CF[k] for k in SERIES + ("hole_flux", "time", "hole_z")} | {
+        q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters} | {
+        "design": ("1", "design point id (hash of its parameter values)"), "hole": ("1", "index of the side hole, by axial position")}
+    if st.kind == "full_factorial":
+        ds = ds.set_index(design=st.parameters).unstack("design")
+        ds = ds.reindex({q: st.grid[q] for q in st.parameters})
+        ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
+            [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
+        meta["point_id"] = ("1", "design point id (hash of its parameter values)")
+    for k in ds.variables:
+        if k in meta:
+            ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
+    ds.attrs.update(provenance_attrs(cfg, study=name, design_kind=st.kind, model=st.model, mesh_level=st.level,
+                                     rung=st.rung, symmetry=st.symmetry, base_values=st.base,
+                                     points={p.id: p.values for p in st.points},
+                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points},
+                                     stent_lumen_fraction="not computed: the run files record the outlet flow of the "
+                                                          "whole cross-section only (no stent-lumen probe)"))
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi design study {name}: model {st.model}, {st.kind}, {len(st.points)} points"
+    return ds
+
+
+def standardised_regression_coefficients(ds, parameters, quantity: str) -> tuple[np.ndarray, float]:
+    """SRC_j = b_j s_xj / s_y of the least-squares fit y = b0 + sum b_j x_j over the points of `ds` (one point
+    dimension), and its R^2."""
+    X = np.column_stack([np.asarray(ds[q].values, float) for q in parameters])
+    y = np.asarray(ds[quantity].values, float)
+    ok = np.isfinite(y)
+    X, y = X[ok], y[ok]
+    Xs = (X - X.mean(0)) / np.where(X.std(0) > 0, X.std(0), 1.0)
+    ys = (y - y.mean()) / (y.std() if y.std() > 0 else 1.0)
+    beta, *_ = np.linalg.lstsq(np.c_[np.ones(len(ys)), Xs], ys, rcond=None)
+    r2 = 1.0 - float(np.sum((ys - np.c_[np.ones(len(ys)), Xs] @ beta) ** 2)) / max(float(np.sum(ys ** 2)), 1e-300)
+    return beta[1:], r2
