@@ -448,7 +448,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
         "design": ("1", "design point id (hash of its parameter values)"), "hole": ("1", "index of the side hole, by axial position")}
     if st.kind == "full_factorial":
         ds = ds.set_index(design=st.parameters).unstack("design")
-        ds = ds.reindex({q: st.grid[q] for q in st.parameters})
+        ds = ds.reindex({q: st.grid[q] for q in st.parameters}).transpose(*st.parameters, ...)
         ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
             [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
         meta["point_id"] = ("1", "design point id (hash of its parameter values)")
