@@ -32,6 +32,7 @@ include: "workflow/rules/figures.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/ladder.smk"
 include: "workflow/rules/stability.smk"
+include: "workflow/rules/designs.smk"
 
 
 rule all:

@@ -586,12 +586,19 @@ def validate_config(cfg: dict) -> None:
     _validate_schema(cfg)
     for check in CHECKS:
         check(cfg)
+    from ureterfsi.designs import check_design_studies  # each design point validated as a config of its own
+    check_design_studies(cfg)
+
+
+# the geometry the r-z wall solve reads (ureterfsi.calibration.WallModel): the stent and its holes do not enter
+WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness")
 
 
 def wall_sections(cfg: dict) -> dict:
     """The configuration the one-way rung's r-z wall solve reads (ureterfsi.oneway.wall_history): a change
     re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
-    return {k: cfg[k] for k in ("geometry", "ureter", "peristalsis", "time")} | {
+    return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
+        k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
         "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}
 
 

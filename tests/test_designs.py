@@ -1,0 +1,179 @@
+"""Design studies (ureterfsi.designs, workflow/rules/designs.smk): expansion, ids, refusals, the job plan of
+a 100-point study, what a change re-runs, and a 2 x 2 grid end to end on the 10 mm segment."""
+from __future__ import annotations
+
+import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
+import copy
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+from ureterfsi.config import ConfigError, load_config
+from ureterfsi.designs import point_id, studies
+from test_workflow_e2e import e2e_config, job_counts, ok, snakemake
+
+REPO = Path(__file__).resolve().parent.parent
+BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+
+
+def config_with(**study_specs) -> dict:
+    return load_config(BASE, {"design_studies": study_specs})
+
+
+def grid(mode="full_factorial", model="3", **params):
+    return {"model": model, "level": "coarse", "grid": {"mode": mode, "parameters": params}}
+
+
+def test_full_factorial_expansion():
+    st = studies(config_with(s=grid(hole_diameter=[5e-4, 7e-4], hole_pair_spacing=[0.005, 0.01, 0.025])))["s"]
+    assert st.kind == "full_factorial" and st.rung == "one_way" and st.symmetry == "quarter"
+    assert [tuple(p.values.values()) for p in st.points] == [(d, s) for d in (5e-4, 7e-4) for s in (0.005, 0.01, 0.025)]
+    holes = [p.config["models"]["3"]["holes"] for p in st.points[:3]]
+    assert holes == [22, 12, 6]                       # Table 1: floor(L/s) + 1 pairs
+    assert st.points[1].config["geometry"]["hole_diameter"] == 5e-4
+    assert len({p.mesh_id for p in st.points}) == 6 and len({p.wall_id for p in st.points}) == 1
+
+
+def test_one_at_a_time_expansion_and_sharing():
+    st = studies(config_with(s=grid("one_at_a_time", hole_diameter=[5e-4, 7e-4], wall_stiffness_scale=[0.5, 1.0, 1.5])))["s"]
+    vals = [p.values for p in st.points]
+    assert vals == [{"hole_diameter": 5e-4, "wall_stiffness_scale": 1.0}, {"hole_diameter": 7e-4, "wall_stiffness_scale": 1.0},
+                    {"hole_diameter": 5e-4, "wall_stiffness_scale": 0.5}, {"hole_diameter": 5e-4, "wall_stiffness_scale": 1.5}]
+    # a hole change: new mesh, same wall; a wall change: same mesh, new wall
+    assert st.points[1].mesh_id != st.points[0].mesh_id and st.points[1].wall_id == st.points[0].wall_id
+    assert st.points[2].mesh_id == st.points[0].mesh_id and st.points[2].wall_id != st.points[0].wall_id
+    assert st.points[2].config["ureter"]["c10"] == pytest.approx(0.5 * BASE["ureter"]["c10"])
+
+
+@pytest.mark.parametrize("method,size", [("sobol", 8), ("latin_hypercube", 7)])
+def test_sample_is_deterministic_and_within_bounds(method, size):
+    spec = {"model": "3", "level": "coarse", "sample": {"method": method, "size": size, "seed": 3, "bounds": {
+        "peak_traction": [3e4, 7e4], "stent_outer_diameter": [1.7e-3, 2.6e-3]}}}
+    a, b = (studies(config_with(s=copy.deepcopy(spec)))["s"] for _ in range(2))
+    assert [p.id for p in a.points] == [p.id for p in b.points] and len(a.points) == size
+    x = np.array([list(p.values.values()) for p in a.points])
+    assert (x[:, 0] >= 3e4).all() and (x[:, 0] <= 7e4).all() and (x[:, 1] >= 1.7e-3).all() and (x[:, 1] <= 2.6e-3).all()
+    spec["sample"]["seed"] = 4
+    assert [p.id for p in studies(config_with(s=spec))["s"].points] != [p.id for p in a.points]
+
+
+def test_ids_stable():
+    assert point_id({"hole_diameter": 5e-4}) == point_id({"hole_diameter": 5.0000000000001e-4})
+    assert point_id({"hole_diameter": 5e-4}) != point_id({"hole_diameter": 6e-4})
+    st = studies(config_with(s=grid(hole_diameter=[5e-4])))["s"]
+    assert st.points[0].id == point_id({"hole_diameter": 5e-4}) == "%s" % st.points[0].id
+    # a base-configuration change keeps the point's id (its parameters), not its mesh
+    other = load_config(BASE, {"design_studies": {"s": grid(hole_diameter=[5e-4])}, "mesh": {"sizes": {"fluid_bulk": 9e-4}}})
+    assert studies(other)["s"].points[0].id == st.points[0].id and studies(other)["s"].points[0].mesh_id != st.points[0].mesh_id
+
+
+@pytest.mark.parametrize("params,parameter,text", [
+    ({"hole_diameter": [1.2e-3]}, "hole_diameter", "stent inner diameter"),
+    ({"hole_diameter": [3e-4]}, "hole_diameter", "mesh.resolution_minima.hole"),
+    ({"stent_outer_diameter": [3e-3]}, "stent_outer_diameter", "Fr"),
+    ({"stent_wall_thickness": [1e-4]}, "stent_wall_thickness", "mesh.resolution_minima.stent_wall"),
+    ({"stent_wall_thickness": [1.2e-3]}, "stent_wall_thickness", "no stent lumen"),
+    ({"hole_pair_rotation": [90.0]}, "hole_pair_rotation", "not yet supported"),
+    ({"stent_eccentricity": [1e-4]}, "stent_eccentricity", "not yet supported"),
+])
+def test_impossible_designs_refused(params, parameter, text):
+    with pytest.raises(ConfigError) as err:
+        config_with(s=grid(**params))
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"config error: design_studies.s.grid.parameters.{parameter}:"), msg
+    assert text in msg, msg
+
+
+def test_study_refusals():
+    with pytest.raises(ConfigError, match=r"design_studies.s.grid.parameters.hole_diameter: a stent parameter"):
+        config_with(s=grid(model="1", hole_diameter=[5e-4]))
+    with pytest.raises(ConfigError, match=r"design_studies.s.sample.size: .*power of 2"):
+        config_with(s={"model": "3", "level": "coarse", "sample": {"method": "sobol", "size": 6, "seed": 0,
+                                                                   "bounds": {"peak_traction": [3e4, 7e4]}}})
+    with pytest.raises(ConfigError, match=r"design_studies.s.level"):
+        config_with(s={"model": "3", "level": "finest", "grid": {"parameters": {"peak_traction": [3e4]}}})
+
+
+def _dry(work: Path, cfg: dict, target: str, *args):
+    path = work / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    return job_counts(ok(snakemake(work, path, "-n", target, *args, profile=None)))
+
+
+def test_dry_run_of_a_100_point_study(tmp_path):
+    cfg = copy.deepcopy(BASE)
+    cfg["design_studies"] = {"big": grid(hole_diameter=[float(v) for v in np.linspace(5e-4, 9e-4, 10)],
+                                         wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
+    counts = _dry(tmp_path, cfg, "design_big")
+    assert counts == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10, "design_dataset": 1,
+                      "design_figures": 1, "design_big": 1}, counts
+
+
+def _pretend_done(work: Path, cfg: dict, name: str) -> None:
+    """Every output of study `name` as an empty file, in job order (then `snakemake --touch` records them as
+    made by their jobs)."""
+    st = studies(load_config(copy.deepcopy(cfg)))[name]
+    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in st.points for e in ("msh", "json")]
+              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in st.points],
+              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points], [f"results/designs/{name}.nc"],
+              [f"results/figures/designs/{name}_parameters.{e}" for e in cfg["figures"]["formats"]]]
+    for i, stage in enumerate(stages):
+        for f in stage:
+            (work / f).parent.mkdir(parents=True, exist_ok=True)
+            (work / f).touch()
+            os.utime(work / f, (1e9 + i, 1e9 + i))
+
+
+def test_one_stent_change_reruns_only_that_points_mesh_and_solve(tmp_path):
+    cfg = copy.deepcopy(BASE)
+    cfg["design_studies"] = {"oat": grid("one_at_a_time", hole_diameter=[5e-4, 7e-4, 8e-4],
+                                         wall_stiffness_scale=[0.5, 1.0])}
+    path = tmp_path / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    _pretend_done(tmp_path, cfg, "oat")
+    ok(snakemake(tmp_path, path, "--touch", "--cores", "1", "design_oat", profile=None))   # records the metadata
+    assert _dry(tmp_path, cfg, "design_oat") == {}
+    cfg["design_studies"]["oat"]["grid"]["parameters"]["hole_diameter"][2] = 8.5e-4
+    assert _dry(tmp_path, cfg, "design_oat") == {"design_mesh": 1, "design_solve": 1, "design_dataset": 1,
+                                                  "design_figures": 1, "design_oat": 1}
+    cfg["design_studies"]["oat"]["grid"]["parameters"]["hole_diameter"][2] = 8e-4
+    cfg["design_studies"]["oat"]["grid"]["parameters"]["wall_stiffness_scale"][0] = 0.6
+    assert _dry(tmp_path, cfg, "design_oat") == {"design_wall_motion": 1, "design_solve": 1, "design_dataset": 1,
+                                                  "design_figures": 1, "design_oat": 1}
+
+
+def test_two_by_two_grid_end_to_end(tmp_path):
+    cfg = e2e_config(tmp_path / "base.yaml")
+    cfg["design_studies"] = {"mini": {"model": "2", "level": "coarse", "rung": "one_way", "grid": {
+        "parameters": {"hole_diameter": [5e-4, 6e-4], "peak_traction": [4e4, 5e4]}}}}
+    path = tmp_path / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=600)))
+    assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_dataset": 1,
+                      "design_figures": 1, "design_mini": 1}, counts
+    with xr.open_dataset(tmp_path / "results/designs/mini.nc") as ds:
+        ds.load()
+    print("\n2x2 design study:", {q: ds[q].values.round(12).tolist() for q in (
+        "peak_outlet_flux", "backflow_volume", "hole_exchange_fraction", "peak_stent_von_mises",
+        "peak_wall_displacement", "wall_time")})
+    assert ds["peak_outlet_flux"].dims == ("hole_diameter", "peak_traction")
+    assert list(ds["hole_diameter"].values) == [5e-4, 6e-4] and ds["outlet_flux"].dims[-1] == "time"
+    for name, var in ds.variables.items():
+        assert var.attrs.get("units") and var.attrs.get("long_name"), name
+    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["study"] == "mini" and "git_commit" in ds.attrs
+    for q in ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume"):
+        assert np.isfinite(ds[q].values).all(), q     # two steps: the outlet flow may stay <= 0
+    for q in ("peak_stent_von_mises", "peak_wall_displacement", "hole_exchange_fraction"):
+        assert np.isfinite(ds[q].values).all() and (ds[q].values > 0).all(), q
+    # the wall moves more under the larger load, whatever the hole
+    disp = ds["peak_wall_displacement"].values
+    assert (disp[:, 1] > disp[:, 0]).all(), disp
+    for ext in cfg["figures"]["formats"]:
+        assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
+    for p in ds["point_id"].values.ravel():
+        assert (tmp_path / f"results/logs/designs/mini/{p}.log").stat().st_size > 0
+        assert (tmp_path / f"results/benchmarks/designs/mini/{p}.tsv").exists()

@@ -1,0 +1,480 @@
+"""Design studies (config `design_studies`): a base model's configuration varied over stent, wall and load
+parameters, each design point a configuration of its own with its own chain of jobs.
+
+A study is a grid (``full_factorial``: every combination; ``one_at_a_time``: the base point and each value of
+one parameter with the others at the base) or a sample (``sobol`` or ``latin_hypercube`` of
+``scipy.stats.qmc``, seeded, scaled to the bounds). A point is named by a stable id, the first 10 hex digits
+of the SHA-256 of its parameter values; its configuration is the base configuration with the point's
+overrides (``PARAMETERS``), validated by ``ureterfsi.config.validate_config`` like any configuration, so an
+impossible design is refused before any job starts, in one line naming the parameter.
+
+What a point recomputes follows from content-addressed identities: the mesh (``mesh_id``: geometry, mesh
+sizes, model row, level, symmetry) and, on the one-way rung, the r-z wall motion (``wall_id``:
+``ureterfsi.config.wall_sections``). A stent or hole change gives a new mesh and urine solve on the shared
+wall motion; a wall or load change gives one wall motion per distinct wall, shared by every stent on it.
+
+Results (``study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
+through each side hole, the share of the outlet flow exchanged through the holes, peak stent von Mises
+stress, peak wall displacement) and the time series behind them, on one dimension per parameter for a full
+factorial grid, else on a ``design`` dimension with the parameters as coordinates.
+"""
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .config import ConfigError, _fmt, validate_config, wall_sections
+
+FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
+FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
+ID_DIGITS = 10
+VALUE_DIGITS = 10                      # significant digits a parameter value keeps (ids and configs agree)
+RESERVED_NAMES = ("meshes", "wall_motion")   # directories of results/designs/
+
+
+@dataclass(frozen=True)
+class Parameter:
+    units: str
+    long_name: str
+    part: str                          # "stent": re-mesh + urine solve; "wall": wall motion + urine solve;
+                                       # "solve": the solve alone (the stent material)
+
+
+PARAMETERS = {
+    "hole_diameter": Parameter("m", "side-hole diameter", "stent"),
+    "hole_pair_spacing": Parameter("m", "distance between side-hole pairs (count by the Table 1 rule)", "stent"),
+    "stent_outer_diameter": Parameter("m", "stent outer diameter", "stent"),
+    "stent_wall_thickness": Parameter("m", "stent wall thickness", "stent"),
+    "stent_youngs_modulus": Parameter("Pa", "Young's modulus of the stent", "solve"),
+    "wall_stiffness_scale": Parameter("1", "common factor on the five Mooney-Rivlin coefficients of the wall", "wall"),
+    "peak_traction": Parameter("Pa", "peak traction of the peristaltic load", "wall"),
+    "pulse_speed": Parameter("m s-1", "speed of the peristaltic pulse", "wall"),
+}
+NOT_YET_SUPPORTED = {
+    "hole_pair_rotation": "rotated hole pairs break the quarter symmetry; the full or a sector mesh is not built yet",
+    "stent_eccentricity": "an eccentric stent breaks the quarter symmetry; the half mesh of an offset stent is not "
+                          "built yet",
+}
+MOONEY_RIVLIN = ("c10", "c01", "c20", "c02", "c11")
+# config keys each parameter sets (to name the parameter an invalid point's error comes from)
+CONFIG_KEYS = {
+    "hole_diameter": ("geometry.hole_diameter", "mesh.sizes.hole"),
+    "hole_pair_spacing": ("models.", "geometry.hole_end_clearance"),
+    "stent_outer_diameter": ("geometry.stent_inner_diameter", "geometry.stent_wall_thickness"),
+    "stent_wall_thickness": ("geometry.stent_wall_thickness", "geometry.stent_inner_diameter", "mesh.sizes.stent_wall"),
+    "stent_youngs_modulus": ("stent.",),
+    "wall_stiffness_scale": ("ureter.",),
+    "peak_traction": ("peristalsis.",),
+    "pulse_speed": ("peristalsis.",),
+}
+
+
+@dataclass
+class Point:
+    id: str
+    values: dict                       # parameter -> value (SI units)
+    config: dict                       # the point's validated configuration
+    mesh_id: str
+    wall_id: str | None                # None on the fully coupled rung (no separate wall solve)
+
+
+@dataclass
+class Study:
+    name: str
+    model: str
+    level: str
+    rung: str
+    symmetry: str
+    kind: str                          # full_factorial | one_at_a_time | sobol | latin_hypercube
+    parameters: list                   # names, in configuration order
+    base: dict                         # parameter -> value of the base configuration
+    grid: dict = field(default_factory=dict)   # full factorial: parameter -> values (the dataset's dimensions)
+    points: list = field(default_factory=list)
+
+    def point(self, point_id: str) -> Point:
+        for p in self.points:
+            if p.id == point_id:
+                return p
+        raise KeyError(f"design study {self.name} has no point {point_id}")
+
+
+def _short_hash(data) -> str:
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:ID_DIGITS]
+
+
+def _round(v: float) -> float:
+    return float(f"{float(v):.{VALUE_DIGITS}g}")
+
+
+def point_id(values: dict) -> str:
+    """Stable id of a design point: hash of its parameter values (rounded to VALUE_DIGITS digits)."""
+    return _short_hash({k: f"{_round(v):.{VALUE_DIGITS}g}" for k, v in values.items()})
+
+
+def run_rung(cfg: dict, model: str) -> tuple[str, str]:
+    """(fidelity, symmetry) of a model's runs: study.runs overrides of study.fidelity and mesh.symmetry."""
+    over = cfg["study"]["runs"].get(str(model), {})
+    return over.get("fidelity", cfg["study"]["fidelity"]), over.get("symmetry", cfg["mesh"]["symmetry"])
+
+
+def base_values(cfg: dict, model: str) -> dict:
+    """Every parameter's value in the base configuration (model `model`)."""
+    g, m = cfg["geometry"], cfg["models"][model]
+    return {"hole_diameter": g["hole_diameter"], "hole_pair_spacing": m["hole_pair_spacing"],
+            "stent_outer_diameter": g["stent_inner_diameter"] + 2 * g["stent_wall_thickness"],
+            "stent_wall_thickness": g["stent_wall_thickness"],
+            "stent_youngs_modulus": cfg["stent"]["youngs_modulus"], "wall_stiffness_scale": 1.0,
+            "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"]}
+
+
+def apply(cfg: dict, model: str, values: dict) -> dict:
+    """The base configuration with a point's overrides (without `design_studies`, unvalidated).
+
+    The stent keeps its outer diameter when its wall thickness changes (inner = outer - 2 t); a pair spacing s
+    gives floor(L/s) + 1 pairs at clip(k s, c, L - c) (Table 1 rule, ureterfsi.geometry.hole_pair_positions);
+    the wall stiffness scale multiplies c10, c01, c20, c02, c11 (kappa fixed, as the calibration does)."""
+    out = copy.deepcopy({k: v for k, v in cfg.items() if k != "design_studies"})
+    g, base = out["geometry"], base_values(cfg, model)
+    if "hole_diameter" in values:
+        g["hole_diameter"] = values["hole_diameter"]
+    if "stent_outer_diameter" in values or "stent_wall_thickness" in values:
+        outer = values.get("stent_outer_diameter", base["stent_outer_diameter"])
+        t = values.get("stent_wall_thickness", base["stent_wall_thickness"])
+        g["stent_wall_thickness"], g["stent_inner_diameter"] = t, _round(outer - 2 * t)
+    if "hole_pair_spacing" in values:
+        s = values["hole_pair_spacing"]
+        out["models"][model].update(hole_pair_spacing=s, holes=2 * (math.floor(g["length"] / s + 1e-9) + 1),
+                                    label=f"{s * 1e3:g} mm")
+    if "stent_youngs_modulus" in values:
+        out["stent"]["youngs_modulus"] = values["stent_youngs_modulus"]
+    if "wall_stiffness_scale" in values:
+        for c in MOONEY_RIVLIN:
+            out["ureter"][c] = _round(cfg["ureter"][c] * values["wall_stiffness_scale"])
+    if "peak_traction" in values:
+        out["peristalsis"]["peak_traction"] = values["peak_traction"]
+    if "pulse_speed" in values:
+        out["peristalsis"]["speed"] = values["pulse_speed"]
+    return out
+
+
+def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:
+    """The configuration entering a mesh (rule mesh's rerun trigger) with its level and symmetry."""
+    return {"geometry": cfg["geometry"], "mesh": cfg["mesh"], "model": cfg["models"][model],
+            "level": level, "symmetry": symmetry}
+
+
+def solve_sections(cfg: dict, model: str) -> dict:
+    """The configuration entering one solve (rule solve's rerun trigger)."""
+    keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
+    return {k: cfg[k] for k in keys} | {"model": cfg["models"][model]}
+
+
+# ------------------------------------------------------------------------------------------ expansion
+
+def _unit_sample(method: str, dim: int, size: int, seed: int) -> np.ndarray:
+    from scipy.stats import qmc
+
+    sampler = qmc.Sobol(dim, scramble=True, seed=seed) if method == "sobol" else qmc.LatinHypercube(dim, seed=seed)
+    return sampler.random(size)
+
+
+def _parameter_key(name: str, spec: dict, param: str) -> str:
+    return (f"design_studies.{name}.grid.parameters.{param}" if "grid" in spec
+            else f"design_studies.{name}.sample.bounds.{param}")
+
+
+def _check_study(cfg: dict, name: str, spec: dict) -> None:
+    key = f"design_studies.{name}"
+    if name in RESERVED_NAMES:
+        raise ConfigError(key, f"the name is reserved for results/designs/{name}/; choose another")
+    if spec["model"] not in cfg["models"]:
+        raise ConfigError(f"{key}.model", f"must be one of models {sorted(cfg['models'], key=int)}, "
+                                          f"got {_fmt(spec['model'])}")
+    if spec["level"] not in cfg["mesh"]["levels"]:
+        raise ConfigError(f"{key}.level", f"must be one of mesh.levels {list(cfg['mesh']['levels'])}, "
+                                          f"got {_fmt(spec['level'])}")
+    if ("grid" in spec) == ("sample" in spec):
+        raise ConfigError(key, "needs exactly one of grid (values per parameter) or sample (bounds per parameter)")
+    params = spec["grid"]["parameters"] if "grid" in spec else spec["sample"]["bounds"]
+    for p in params:
+        if p in NOT_YET_SUPPORTED:
+            raise ConfigError(_parameter_key(name, spec, p), f"not yet supported: {NOT_YET_SUPPORTED[p]}")
+    stented = cfg["models"][spec["model"]]["stent"]
+    for p in params:
+        if PARAMETERS[p].part in ("stent", "solve") and not stented:
+            raise ConfigError(_parameter_key(name, spec, p),
+                              f"a stent parameter needs a stented base model; model {spec['model']} has no stent")
+    rung, symmetry = spec.get("rung") or run_rung(cfg, spec["model"])[0], run_rung(cfg, spec["model"])[1]
+    if rung == "one_way" and symmetry == "axisymmetric":
+        raise ConfigError(f"{key}.rung", f"one_way needs a 3D mesh; model {spec['model']} runs {symmetry}")
+    if "grid" in spec:
+        for p, vals in params.items():
+            rounded = [_round(v) for v in vals]
+            if len(set(rounded)) != len(rounded):
+                raise ConfigError(_parameter_key(name, spec, p), f"values must be distinct, got {_fmt(list(vals))}")
+    else:
+        s = spec["sample"]
+        for p, (lo, hi) in params.items():
+            if not lo < hi:
+                raise ConfigError(_parameter_key(name, spec, p), f"bounds must be [low, high] with low < high, "
+                                                                 f"got {_fmt([lo, hi])}")
+        if s["method"] == "sobol" and s["size"] & (s["size"] - 1):
+            raise ConfigError(f"{key}.sample.size", f"a Sobol' sample keeps its balance only at a power of 2, "
+                                                    f"got {s['size']}")
+
+
+def _point_values(cfg: dict, spec: dict, base: dict) -> tuple[str, list, dict, list]:
+    """(kind, parameters, full-factorial grid, [values per point]) of a study."""
+    if "grid" in spec:
+        mode, params = spec["grid"]["mode"], spec["grid"]["parameters"]
+        names = list(params)
+        if mode == "full_factorial":
+            grid = {p: [_round(v) for v in params[p]] for p in names}
+            return mode, names, grid, [dict(zip(names, combo)) for combo in itertools.product(*grid.values())]
+        at_base = {p: _round(base[p]) for p in names}
+        points = [at_base]
+        for p in names:
+            points += [at_base | {p: _round(v)} for v in params[p] if _round(v) != at_base[p]]
+        return mode, names, {}, points
+    s = spec["sample"]
+    names = list(s["bounds"])
+    lo, hi = (np.array([s["bounds"][p][i] for p in names]) for i in (0, 1))
+    unit = _unit_sample(s["method"], len(names), s["size"], s["seed"])
+    return s["method"], names, {}, [{p: _round(v) for p, v in zip(names, lo + u * (hi - lo))} for u in unit]
+
+
+def _precheck(cfg: dict, model: str, values: dict) -> tuple[str, str] | None:
+    """(parameter, constraint) of a point the configuration checks would blame on another key, else None."""
+    base = base_values(cfg, model)
+    outer = values.get("stent_outer_diameter", base["stent_outer_diameter"])
+    t = values.get("stent_wall_thickness", base["stent_wall_thickness"])
+    lumen = cfg["geometry"]["ureter_outer_diameter"] - 2 * cfg["geometry"]["ureter_wall_thickness"]
+    if "stent_outer_diameter" in values:
+        fr = outer / FRENCH
+        if not FRENCH_RANGE[0] - 1e-9 <= fr <= FRENCH_RANGE[1] + 1e-9:
+            return "stent_outer_diameter", (f"{_fmt(outer)} m = {fr:.3g} Fr is outside the ureteral stent sizes "
+                                            f"{FRENCH_RANGE[0]:g}-{FRENCH_RANGE[1]:g} Fr (1 Fr = 1/3 mm)")
+        if not outer < lumen:
+            return "stent_outer_diameter", (f"{_fmt(outer)} m must be < the ureter lumen diameter {_fmt(lumen)} m "
+                                            f"(the stent would touch the wall)")
+    if ("stent_outer_diameter" in values or "stent_wall_thickness" in values) and not 2 * t < outer:
+        p = "stent_wall_thickness" if "stent_wall_thickness" in values else "stent_outer_diameter"
+        return p, f"wall thickness {_fmt(t)} m leaves no stent lumen in an outer diameter of {_fmt(outer)} m"
+    return None
+
+
+def _blame(values: dict, err: ConfigError) -> str:
+    """The parameter of a point an invalid configuration key comes from (first match), else the first one."""
+    for p in values:
+        if any(err.key.startswith(k) for k in CONFIG_KEYS[p]):
+            return p
+    return next(iter(values))
+
+
+def _values_text(values: dict) -> str:
+    return ", ".join(f"{p} = {_fmt(v)} {PARAMETERS[p].units}" for p, v in values.items())
+
+
+def expand_study(cfg: dict, name: str) -> Study:
+    """The design points of study `name`, each with its validated configuration; ConfigError (one line,
+    naming the study's parameter) for a study or a point that cannot be posed."""
+    spec = cfg["design_studies"][name]
+    _check_study(cfg, name, spec)
+    model = spec["model"]
+    fidelity, symmetry = run_rung(cfg, model)
+    rung = spec.get("rung") or fidelity
+    base = base_values(cfg, model)
+    kind, names, grid, all_values = _point_values(cfg, spec, base)
+    study = Study(name, model, spec["level"], rung, symmetry, kind, names, {p: base[p] for p in names}, grid)
+    seen = set()
+    for values in all_values:
+        pid = point_id(values)
+        if pid in seen:
+            continue
+        seen.add(pid)
+        bad = _precheck(cfg, model, values)
+        if bad:
+            raise ConfigError(_parameter_key(name, spec, bad[0]), f"point {pid} ({_values_text(values)}): {bad[1]}")
+        pcfg = apply(cfg, model, values)
+        try:
+            validate_config(pcfg)
+        except ConfigError as err:
+            raise ConfigError(_parameter_key(name, spec, _blame(values, err)),
+                              f"point {pid} ({_values_text(values)}) cannot be posed: {err.key}: {err.constraint}") from None
+        study.points.append(Point(pid, values, pcfg, _short_hash(mesh_sections(pcfg, model, spec["level"], symmetry)),
+                                  _short_hash(wall_sections(pcfg)) if rung == "one_way" else None))
+    return study
+
+
+_CACHE: dict = {}
+
+
+def studies(cfg: dict) -> dict:
+    """{name: Study} of every design study of the configuration (expanded once per configuration)."""
+    specs = cfg.get("design_studies") or {}
+    key = _short_hash({k: v for k, v in cfg.items()})
+    if key not in _CACHE:
+        _CACHE.clear()
+        _CACHE[key] = {name: expand_study(cfg, name) for name in specs}
+    return _CACHE[key]
+
+
+def check_design_studies(cfg: dict) -> None:
+    """Every study expanded and every point validated (called by ureterfsi.config.validate_config)."""
+    studies(cfg)
+
+
+def mesh_request(cfg: dict, mesh_id: str) -> tuple[dict, str, str, str]:
+    """(configuration, model, level, symmetry) of a design mesh, from the first point that uses it."""
+    for st in studies(cfg).values():
+        for p in st.points:
+            if p.mesh_id == mesh_id:
+                return p.config, st.model, st.level, st.symmetry
+    raise KeyError(f"no design point uses mesh {mesh_id}")
+
+
+def wall_config(cfg: dict, wall_id: str) -> dict:
+    """Configuration of a design wall motion, from the first point that uses it."""
+    for st in studies(cfg).values():
+        for p in st.points:
+            if p.wall_id == wall_id:
+                return p.config
+    raise KeyError(f"no design point uses wall motion {wall_id}")
+
+
+# ------------------------------------------------------------------------------------------ runs
+
+def solve_point(cfg: dict, study: Study, point: Point, mesh: str, out: str, checkpoint: str | None,
+                wall: str | None) -> None:
+    """One design point's solve on its rung (serial): ureterfsi.oneway.run on the shared wall motion, or
+    ureterfsi.study.run fully coupled."""
+    from .study import RunSpec
+
+    spec = RunSpec(study.model, study.level, study.symmetry, mesh)
+    if study.rung == "one_way":
+        from . import oneway
+
+        oneway.run(point.config, spec, out, checkpoint, wall_path=wall)
+    else:
+        from .study import run
+
+        run(point.config, spec, out, checkpoint)
+
+
+# ------------------------------------------------------------------------------------------ dataset
+SCALARS = {
+    "peak_outlet_flux": ("m3 s-1", "maximum over time of the outlet volumetric flow rate"),
+    "mean_outlet_flux": ("m3 s-1", "time mean of the outlet volumetric flow rate over the run"),
+    "backflow_volume": ("m3", "volume flowing back in through the outlet, integral of max(-Q_out, 0) dt"),
+    "peak_hole_flux": ("m3 s-1", "maximum over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_volume": ("m3", "integral over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "
+                                    "the volume through the outlet, integral |Q_out| dt"),
+    "peak_stent_von_mises": ("Pa", "maximum over time and the stent of the von Mises stress"),
+    "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
+    "wall_time": ("s", "wall-clock time of the point's solve"),
+}
+SERIES = ("outlet_flux", "inlet_flux", "stent_max_von_mises", "max_wall_displacement")
+
+
+def _trapz(y: np.ndarray, t: np.ndarray) -> float:
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
+
+
+def point_scalars(run) -> dict:
+    """The scalars of one run dataset (ureterfsi.study.probes_dataset); hole flows per hole."""
+    t = run["time"].values.astype(float)
+    q = run["outlet_flux"].values.astype(float)
+    hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((t.size, 0))
+    # the quarter model records the +y hole of each pair; the -y hole carries the same flow by symmetry
+    mirror = 2.0 if hole.shape[1] and np.all(run["hole_side"].values > 0) else 1.0
+    exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
+    return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
+            "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
+            "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
+            "hole_exchange_volume": exchange,
+            "hole_exchange_fraction": mirror * exchange.sum() / _trapz(np.abs(q), t),
+            "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
+            "peak_wall_displacement": float(run["max_wall_displacement"].max()),
+            "wall_time": float(run.attrs.get("wall_time_s", np.nan))}
+
+
+def study_dataset(cfg: dict, name: str, paths: dict):
+    """Dataset of a study from its run files {point id: path} (see the module docstring)."""
+    import xarray as xr
+
+    from .provenance import provenance_attrs
+    from .study import CF
+
+    st = studies(cfg)[name]
+    runs = {}
+    for p in st.points:
+        with xr.open_dataset(paths[p.id]) as ds:
+            runs[p.id] = ds.load()
+    tc = cfg["time"]
+    t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
+    n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
+    n = len(st.points)
+    data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
+    series = {k: np.full((n, t.size), np.nan) for k in SERIES}
+    hole_series, hole_z = np.full((n, t.size, n_hole), np.nan), np.full((n, n_hole), np.nan)
+    for i, p in enumerate(st.points):
+        r = runs[p.id]
+        for k, v in point_scalars(r).items():
+            data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
+        rt = r["time"].values.astype(float)
+        for k in SERIES:
+            if k in r:
+                series[k][i] = np.interp(t, rt, r[k].values, left=np.nan, right=np.nan)
+        for j in range(r.sizes.get("hole", 0)):
+            hole_series[i, :, j] = np.interp(t, rt, r["hole_flux"].values[:, j], left=np.nan, right=np.nan)
+            hole_z[i, j] = float(r["hole_z"].values[j])
+    vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
+    vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
+    vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
+    coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
+              "hole_z": (("design", "hole"), hole_z)}
+    coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
+    ds = xr.Dataset(vars_, coords=coords)
+    meta = SCALARS | {k: CF[k] for k in SERIES + ("hole_flux", "time", "hole_z")} | {
+        q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters} | {
+        "design": ("1", "design point id (hash of its parameter values)"), "hole": ("1", "index of the side hole, by axial position")}
+    if st.kind == "full_factorial":
+        ds = ds.set_index(design=st.parameters).unstack("design")
+        ds = ds.reindex({q: st.grid[q] for q in st.parameters}).transpose(*st.parameters, ...)
+        ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
+            [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
+        meta["point_id"] = ("1", "design point id (hash of its parameter values)")
+    for k in ds.variables:
+        if k in meta:
+            ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
+    ds.attrs.update(provenance_attrs(cfg, study=name, design_kind=st.kind, model=st.model, mesh_level=st.level,
+                                     rung=st.rung, symmetry=st.symmetry, base_values=st.base,
+                                     points={p.id: p.values for p in st.points},
+                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points},
+                                     stent_lumen_fraction="not computed: the run files record the outlet flow of the "
+                                                          "whole cross-section only (no stent-lumen probe)"))
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi design study {name}: model {st.model}, {st.kind}, {len(st.points)} points"
+    return ds
+
+
+def standardised_regression_coefficients(ds, parameters, quantity: str) -> tuple[np.ndarray, float]:
+    """SRC_j = b_j s_xj / s_y of the least-squares fit y = b0 + sum b_j x_j over the points of `ds` (one point
+    dimension), and its R^2."""
+    X = np.column_stack([np.asarray(ds[q].values, float) for q in parameters])
+    y = np.asarray(ds[quantity].values, float)
+    ok = np.isfinite(y)
+    X, y = X[ok], y[ok]
+    Xs = (X - X.mean(0)) / np.where(X.std(0) > 0, X.std(0), 1.0)
+    ys = (y - y.mean()) / (y.std() if y.std() > 0 else 1.0)
+    beta, *_ = np.linalg.lstsq(np.c_[np.ones(len(ys)), Xs], ys, rcond=None)
+    r2 = 1.0 - float(np.sum((ys - np.c_[np.ones(len(ys)), Xs] @ beta) ** 2)) / max(float(np.sum(ys ** 2)), 1e-300)
+    return beta[1:], r2
