@@ -466,15 +466,6 @@ def check_study(cfg):
                                                     f"{_fmt(cfg['time']['probe_times'])}, got {_fmt(st['convergence_time'])}")
 
 
-def check_memory_levels(cfg):
-    levels = cfg["mesh"]["levels"]
-    for fidelity in ("one_way", "fully_coupled"):
-        for level in cfg["study"]["memory_mb"][fidelity]:
-            if level not in levels:
-                raise ConfigError(f"study.memory_mb.{fidelity}.{level}",
-                                  f"must be a key of mesh.levels {list(levels)} (misspelt?)")
-
-
 def check_runs(cfg):
     for model, over in cfg["study"]["runs"].items():
         key = f"study.runs.{model}"
@@ -565,7 +556,7 @@ CHECKS = (
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
-    check_memory_levels, check_runs, check_ladder, check_figures, check_stability,
+    check_runs, check_ladder, check_figures, check_stability,
 )
 
 
