@@ -411,7 +411,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     import xarray as xr
 
     from .provenance import provenance_attrs
-    from .study import CF
+    from .metadata import VARIABLES as CF
 
     st = studies(cfg)[name]
     runs = {}
