@@ -585,6 +585,15 @@ def validate_config(cfg: dict) -> None:
 WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness")
 
 
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
+
+
+def run_sections(cfg: dict, model: str) -> dict:
+    """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
+    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
+    return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
+
+
 def wall_sections(cfg: dict) -> dict:
     """The configuration the one-way rung's r-z wall solve reads (ureterfsi.oneway.wall_history): a change
     re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""

@@ -369,18 +369,8 @@ def solve_point(cfg: dict, study: Study, point: Point, mesh: str, out: str, chec
 
 
 # ------------------------------------------------------------------------------------------ dataset
-SCALARS = {
-    "peak_outlet_flux": ("m3 s-1", "maximum over time of the outlet volumetric flow rate"),
-    "mean_outlet_flux": ("m3 s-1", "time mean of the outlet volumetric flow rate over the run"),
-    "backflow_volume": ("m3", "volume flowing back in through the outlet, integral of max(-Q_out, 0) dt"),
-    "peak_hole_flux": ("m3 s-1", "maximum over time of |volumetric flow rate| through each side hole"),
-    "hole_exchange_volume": ("m3", "integral over time of |volumetric flow rate| through each side hole"),
-    "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "
-                                    "the volume through the outlet, integral |Q_out| dt"),
-    "peak_stent_von_mises": ("Pa", "maximum over time and the stent of the von Mises stress"),
-    "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
-    "wall_time": ("s", "wall-clock time of the point's solve"),
-}
+SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
+           "hole_exchange_fraction", "peak_stent_von_mises", "peak_wall_displacement", "wall_time")
 SERIES = ("outlet_flux", "inlet_flux", "stent_max_von_mises", "max_wall_displacement")
 
 
@@ -411,7 +401,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     import xarray as xr
 
     from .provenance import provenance_attrs
-    from .metadata import VARIABLES as CF
+    from .metadata import VARIABLES
 
     st = studies(cfg)[name]
     runs = {}
@@ -443,15 +433,12 @@ def study_dataset(cfg: dict, name: str, paths: dict):
               "hole_z": (("design", "hole"), hole_z)}
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
     ds = xr.Dataset(vars_, coords=coords)
-    meta = SCALARS | {k: CF[k] for k in SERIES + ("hole_flux", "time", "hole_z")} | {
-        q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters} | {
-        "design": ("1", "design point id (hash of its parameter values)"), "hole": ("1", "index of the side hole, by axial position")}
+    meta = VARIABLES | {q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters}
     if st.kind == "full_factorial":
         ds = ds.set_index(design=st.parameters).unstack("design")
         ds = ds.reindex({q: st.grid[q] for q in st.parameters}).transpose(*st.parameters, ...)
         ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
             [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
-        meta["point_id"] = ("1", "design point id (hash of its parameter values)")
     for k in ds.variables:
         if k in meta:
             ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])

@@ -59,13 +59,24 @@ VARIABLES = {
     "dofs": ("1", "number of degrees of freedom of the monolithic system"),
     "wall_time": ("s", "wall-clock time of the run"),
     "processes": ("1", "number of MPI processes of the run"),
-    "peak_outlet_flux": ("m3 s-1", "maximum up to the comparison time of the outlet volumetric flow rate"),
+    "peak_outlet_flux": ("m3 s-1", "maximum over the dataset's time window (the comparison time, or the whole run) "
+                                   "of the outlet volumetric flow rate"),
     "peak_stent_max_von_mises": ("Pa", "maximum up to the comparison time of the maximum von Mises stress over "
                                        "the stent"),
     "peak_outlet_hole_flux": ("m3 s-1", "maximum up to the comparison time of |volumetric flow rate| through the "
                                         "outlet-most side hole"),
     "outlet_hole_peak_velocity": ("m s-1", "maximum |velocity along the hole axis| across the outlet-most side "
                                            "hole at the comparison time"),
+    "mean_outlet_flux": ("m3 s-1", "time mean of the outlet volumetric flow rate over the run"),
+    "backflow_volume": ("m3", "volume flowing back in through the outlet, integral of max(-Q_out, 0) dt"),
+    "peak_hole_flux": ("m3 s-1", "maximum over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_volume": ("m3", "integral over time of |volumetric flow rate| through each side hole"),
+    "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "
+                                    "the volume through the outlet, integral |Q_out| dt"),
+    "peak_stent_von_mises": ("Pa", "maximum over time and the stent of the von Mises stress"),
+    "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
+    "design": ("1", "design point id (hash of its parameter values)"),
+    "point_id": ("1", "design point id (hash of its parameter values)"),
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
 }
 

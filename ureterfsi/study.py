@@ -25,6 +25,7 @@ from dolfinx.mesh import compute_midpoints
 from mpi4py import MPI
 
 from . import tags
+from .config import run_sections
 from .fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
 from .fsi import physics
 from .fsi.problem import MonolithicFSI
@@ -294,10 +295,6 @@ def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelit
     return settings
 
 
-# configuration sections a solve reads (with its own entry of `models`)
-RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
-
-
 def _flatten(prefix: str, value, out: dict) -> None:
     if isinstance(value, dict):
         for k, v in value.items():
@@ -308,7 +305,7 @@ def _flatten(prefix: str, value, out: dict) -> None:
 
 def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float, wall_path: str | None = None) -> dict:
     """What determines a run, component -> value (TimeSettings.identity): every key of the configuration
-    sections it reads (RUN_SECTIONS, `models.<model>`), the run's model, mesh level, symmetry, fidelity,
+    sections it reads (ureterfsi.config.run_sections), the run's model, mesh level, symmetry, fidelity,
     end and dt, the SHA-256 of the mesh file (and of the wall-motion file of a one-way run), and the
     versions of ureterfsi and dolfinx."""
     import dolfinx
@@ -317,8 +314,9 @@ def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float,
     from .checked_io import sha256_file
 
     out: dict = {}
-    _flatten("", {k: cfg[k] for k in RUN_SECTIONS}, out)
-    _flatten(f"models.{spec.model}", cfg["models"][spec.model], out)
+    sections = run_sections(cfg, spec.model)
+    _flatten(f"models.{spec.model}", sections.pop("model"), out)
+    _flatten("", sections, out)
     out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,
                 "run.fidelity": fidelity, "run.end": repr(float(end)), "run.dt": repr(float(dt)),
                 "mesh_sha256": sha256_file(spec.mesh_path),

@@ -8,7 +8,7 @@ import sys
 import tempfile
 from types import SimpleNamespace
 
-from ureterfsi.config import wall_sections
+from ureterfsi.config import run_sections, wall_sections
 
 
 def solve_command(config, *, model, level, symmetry, fidelity, mesh, out, log, threads, extra="", tasks=1,
@@ -35,8 +35,7 @@ def convergence_only_end(w):
 
 def study_subset(w):
     """The configuration entering one solve (a change re-runs the solve; plotting options do not)."""
-    keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
-    return json.dumps({k: config[k] for k in keys} | {"model": config["models"][w.model]}, sort_keys=True)
+    return json.dumps(run_sections(config, w.model), sort_keys=True)
 
 
 WALL_MOTION = "results/runs/one_way/wall_motion.nc"
