@@ -6,7 +6,8 @@
    by quadrature): observed order at large strain, and the O(load^2) deviation from the linear solution;
 3. thick incompressible Mooney-Rivlin tube inflated by a follower pressure, plane strain in the r-z mode:
    inner radius against the exact inflation, observed order under refinement, the O(mu/kappa) error of the
-   finite bulk modulus, the dead load of the same magnitude (measurably different), and the Cartesian path.
+   finite bulk modulus, the dead load of the same magnitude (measurably different), the 2D Cartesian and 3D
+   paths.
 """
 from __future__ import annotations
 
@@ -180,3 +181,21 @@ def test_follower_pressure_plane_strain_cartesian():
           f"(dead load: {exact_dead * 1e3:.5f}), error {err:.1e} of the displacement")
     assert err < 1e-3
     assert abs(ri - exact_dead) > 100 * abs(ri - exact)
+
+
+def test_follower_pressure_tube_3d():
+    """The quarter tube extruded into one layer of tetrahedra (3D path), u_z = 0 on both ends."""
+    t0 = time.perf_counter()
+    tube = V.Tube(material=INCOMPRESSIBLE)
+    p = 2.0e4
+    pb = MonolithicFSI(V.quarter_tube_3d_scene(tube, 0.5e-3, lambda t: p * t), TIGHT)
+    its = [pb.solve_steady(k / LOAD_STEPS)[0] for k in range(1, LOAD_STEPS + 1)]
+    x = ufl.SpatialCoordinate(pb.mesh) + pb.field("displacement")
+    ri = V.mean_facet_value(pb, ufl.sqrt(x[0] ** 2 + x[1] ** 2), 1)
+    exact = V.mooney_rivlin_tube_inner_radius(tube.Ri, tube.Ro, tube.material, pressure=p)
+    err = abs(ri - exact) / (exact - tube.Ri)
+    print(f"\n[follower pressure {p:.0e} Pa, 3D, h = 0.5 mm, {V.dofs_count(pb)} dofs] r_i = {ri * 1e3:.5f} mm, "
+          f"exact {exact * 1e3:.5f}, error {err:.1e} of the displacement, Newton its {its}, "
+          f"{time.perf_counter() - t0:.1f} s")
+    assert err < 1e-4
+    assert max(its) <= 6

@@ -507,3 +507,47 @@ def tube_axisymmetric_scene(tube: Tube, n, pressure, follower=True, height=None)
                  dirichlet=[DirichletCondition("displacement", [3], components=[1]),
                             DirichletCondition("velocity", [3], components=[1])],
                  axisymmetric=True, name="mooney-rivlin-tube-rz", **loads)
+
+
+def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
+    """Plane-strain (lambda_z = 1) inflation in 3D: the quarter annulus Ri < r < Ro, x, y >= 0 (gmsh,
+    second-order geometry, size h) extruded by h into one layer of tetrahedra; u_x = v_x = 0 on x = 0,
+    u_y = v_y = 0 on y = 0, u_z = v_z = 0 on both end faces, outer surface free, and on the inner surface a
+    follower pressure p(t) (or the dead load P N = -p N). Facets: 1 inner, 2 outer, 3 x = 0, 4 y = 0, 5 ends."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("quarter-tube")
+        geo = gmsh.model.geo
+        c = geo.addPoint(0, 0, 0)
+        p1, p2, p3, p4 = (geo.addPoint(tube.Ri, 0, 0), geo.addPoint(tube.Ro, 0, 0), geo.addPoint(0, tube.Ro, 0),
+                          geo.addPoint(0, tube.Ri, 0))
+        curves = {4: geo.addLine(p1, p2), 2: geo.addCircleArc(p2, c, p3), 3: geo.addLine(p3, p4),
+                  1: geo.addCircleArc(p4, c, p1)}
+        surf = geo.addPlaneSurface([geo.addCurveLoop([curves[4], curves[2], curves[3], curves[1]])])
+        out = geo.extrude([(2, surf)], 0, 0, h, numElements=[1])
+        geo.synchronize()
+        # extrude returns [top, volume, then one lateral surface per bounding curve in curve-loop order]
+        top, vol, lateral = out[0][1], out[1][1], [e[1] for e in out[2:]]
+        gmsh.model.addPhysicalGroup(3, [vol], 1)
+        for tag, side in zip((4, 2, 3, 1), lateral):
+            gmsh.model.addPhysicalGroup(2, [side], tag)
+        gmsh.model.addPhysicalGroup(2, [surf, top], 5)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+    finally:
+        gmsh.finalize()
+    if follower:
+        loads = dict(pressure_loads=[FollowerPressure([1], lambda X, t: pressure(t))])
+    else:
+        loads = dict(loads=[SurfaceLoad([1], lambda X, t, N: -pressure(t) * N)])
+    dirichlet = [DirichletCondition(f, [tag], components=[comp])
+                 for tag, comp in ((3, 0), (4, 1), (5, 2)) for f in ("displacement", "velocity")]
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)],
+                 dirichlet=dirichlet, name="mooney-rivlin-tube-3d", **loads)
