@@ -1,8 +1,9 @@
 """Verification helpers shared by tests/test_verify_exact.py and benchmarks/convergence.py.
 
 Exact solutions (annular Poiseuille flow, plane-strain inflation of an incompressible five-parameter
-Mooney-Rivlin tube), error norms, observed orders of convergence, and the small scenes the
-verification problems are solved on (built on dolfinx rectangles or tiny gmsh models).
+Mooney-Rivlin tube, a bar and a confined column under their own weight), error norms, observed orders of
+convergence, and the small scenes the verification problems are solved on (built on dolfinx rectangles or
+tiny gmsh models).
 SI units throughout.
 """
 from __future__ import annotations
@@ -16,8 +17,8 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from ureterfsi.fsi import (DirichletCondition, FluidRegion, LinearElastic, MooneyRivlin, NewtonianFluid,
-                           OpenBoundary, Scene, SolidRegion, SurfaceLoad)
+from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, LinearElastic, MooneyRivlin,
+                           NewtonianFluid, OpenBoundary, Scene, SolidRegion, SurfaceLoad)
 from ureterfsi.fsi.tagging import tag_cells, tag_facets
 
 
@@ -307,12 +308,16 @@ def radial_dead_load(p0, ramp=None):
     return traction
 
 
-def tube_scene(tube: Tube, h, p0, ramp=None, order=2):
-    """Plane-strain quarter tube, solid alone, radial dead load p0 on the inner arc, symmetry on x = 0
-    (u_x = v_x = 0) and y = 0 (u_y = v_y = 0), outer surface free."""
+def tube_scene(tube: Tube, h, p0, ramp=None, order=2, follower=False):
+    """Plane-strain quarter tube, solid alone, radial dead load p0 on the inner arc (follower=True: the
+    follower pressure p0 ramp(t), P N = -p J F^-T N), symmetry on x = 0 (u_x = v_x = 0) and y = 0
+    (u_y = v_y = 0), outer surface free."""
     mesh, ct, ft = quarter_annulus_mesh(tube.Ri, tube.Ro, h, order)
-    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)],
-                 loads=[SurfaceLoad([1], radial_dead_load(p0, ramp))],
+    if follower:
+        loads = dict(pressure_loads=[FollowerPressure([1], lambda X, t: p0 if ramp is None else p0 * ramp(t))])
+    else:
+        loads = dict(loads=[SurfaceLoad([1], radial_dead_load(p0, ramp))])
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)], **loads,
                  dirichlet=[DirichletCondition("displacement", [3], components=[0]),
                             DirichletCondition("velocity", [3], components=[0]),
                             DirichletCondition("displacement", [4], components=[1]),
@@ -395,3 +400,154 @@ def annulus_3d_errors(a: Annulus, h, options=None):
     ds = ufl.Measure("ds", domain=pb.mesh, subdomain_data=scene.facet_tags, metadata={"quadrature_degree": 8})
     flux = integrate(v[2], pb.mesh, dx=ds(2)) / a.flux() - 1.0
     return scene.mesh.topology.index_map(3).size_global, dofs_count(pb), err / ref, flux
+
+
+# ------------------------------------------------------------------------------------------------
+# solids under body forces and follower pressures
+# ------------------------------------------------------------------------------------------------
+def hanging_bar_displacement(z, length, weight, youngs_modulus):
+    """Axial displacement of a linear elastic bar (nu = 0) held at z = 0, free at z = L, under a body force
+    `weight` b per volume along +z: E u_z'' = -b, u_z(0) = 0, u_z'(L) = 0 -> u_z = b (L z - z^2/2) / E, with
+    sigma_zz = b (L - z) the only stress and u_x = u_y = u_r = 0: the exact 3D (and axisymmetric) solution."""
+    return weight * (length * z - 0.5 * z**2) / youngs_modulus
+
+
+def hanging_bar_scene(mat: LinearElastic, weight, axisymmetric=False, radius=2e-3, length=10e-3, n=(2, 4)):
+    """Bar of square cross-section radius x radius (3D, create_box: n[0] x n[0] x n[1] cells) or round cylinder
+    of `radius` (axisymmetric r-z, n[0] x n[1] cells) and `length`, clamped at z = 0, body force `weight` (N/m^3)
+    along +z. Facets: 1 the support z = 0, 2 the axis r = 0 (axisymmetric); cells 1."""
+    tol = 1e-12
+    if axisymmetric:
+        mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([radius, length])], n,
+                                      diagonal=dmesh.DiagonalType.crossed)
+    else:
+        mesh = dmesh.create_box(MPI.COMM_WORLD, [np.zeros(3), np.array([radius, radius, length])], (n[0], n[0], n[1]))
+    z = mesh.geometry.dim - 1
+    ct = tag_cells(mesh, {1: lambda x: np.full(x.shape[1], True)})
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[z], 0.0, atol=tol), 2: lambda x: np.isclose(x[0], 0.0, atol=tol)})
+    dirichlet = [DirichletCondition("displacement", [1]), DirichletCondition("velocity", [1])]
+    if axisymmetric:
+        dirichlet += [DirichletCondition("displacement", [2], components=[0]),
+                      DirichletCondition("velocity", [2], components=[0])]
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], mat)],
+                 body_forces=[BodyForce([1], lambda X, t: ufl.as_vector([0.0, 0.0, weight]))],
+                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="hanging-bar")
+
+
+def mooney_rivlin_uniaxial_strain_stress(lam, mat: MooneyRivlin):
+    """Nominal stress P_zz of the engine's Mooney-Rivlin law in uniaxial strain F = diag(1, 1, lam), J = lam:
+    I1 = 2 + lam^2, I2 = 1 + 2 lam^2, P_zz = dW_iso/dlam + kappa (lam - 1) (the P0 pressure pi = kappa (J - 1))."""
+    lam = np.asarray(lam, dtype=float)
+    i1, i2 = lam ** (-2.0 / 3.0) * (2.0 + lam**2) - 3.0, lam ** (-4.0 / 3.0) * (1.0 + 2.0 * lam**2) - 3.0
+    di1 = -2.0 / 3.0 * lam ** (-5.0 / 3.0) * (2.0 + lam**2) + 2.0 * lam ** (1.0 / 3.0)
+    di2 = -4.0 / 3.0 * lam ** (-7.0 / 3.0) * (1.0 + 2.0 * lam**2) + 4.0 * lam ** (-1.0 / 3.0)
+    w1 = mat.c10 + 2.0 * mat.c20 * i1 + mat.c11 * i2
+    w2 = mat.c01 + 2.0 * mat.c02 * i2 + mat.c11 * i1
+    return w1 * di1 + w2 * di2 + mat.bulk_modulus * (lam - 1.0)
+
+
+def confined_column_top_displacement(length, weight, mat: MooneyRivlin):
+    """Top displacement of a column 0 < Y < L in a frictionless rigid channel (lateral displacement zero), held
+    at Y = 0, under a body force `weight` b per reference volume along +Y. Uniaxial strain F = diag(1, 1, lam(Y))
+    for any isotropic law: dP/dY = -b, P(L) = 0 -> P(lam(Y)) = b (L - Y), and u(L) = int_0^L (lam - 1) dY
+    (64-point Gauss-Legendre on the smooth integrand, Brent's method for lam)."""
+    from scipy.optimize import brentq
+
+    xi, wq = np.polynomial.legendre.leggauss(64)
+    Y = 0.5 * length * (xi + 1.0)
+    lam = [brentq(lambda s, P=weight * (length - y): mooney_rivlin_uniaxial_strain_stress(s, mat) - P,
+                  0.2, 5.0, xtol=1e-15, rtol=1e-15) for y in Y]
+    return float(0.5 * length * np.dot(wq, np.asarray(lam) - 1.0))
+
+
+def confined_column_scene(mat, weight, n, width=2e-3, length=10e-3):
+    """Plane-strain column [0, width] x [0, length] (1 x n crossed cells), u_x = v_x = 0 on x = 0 and x = width
+    (frictionless channel walls), u = v = 0 on y = 0, body force `weight` (N/m^3) along +y.
+    Facets: 1 the support y = 0, 2 the channel walls, 3 the free top y = length; cells 1."""
+    tol = 1e-12
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([width, length])], (1, n),
+                                  diagonal=dmesh.DiagonalType.crossed)
+    ct = tag_cells(mesh, {1: lambda x: np.full(x.shape[1], True)})
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[1], 0.0, atol=tol),
+                           2: lambda x: np.isclose(x[0], 0.0, atol=tol) | np.isclose(x[0], width, atol=tol),
+                           3: lambda x: np.isclose(x[1], length, atol=tol)})
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], mat)],
+                 body_forces=[BodyForce([1], lambda X, t: ufl.as_vector([0.0, weight]))],
+                 dirichlet=[DirichletCondition("displacement", [1]), DirichletCondition("velocity", [1]),
+                            DirichletCondition("displacement", [2], components=[0]),
+                            DirichletCondition("velocity", [2], components=[0])],
+                 name="confined-column")
+
+
+def mean_facet_value(problem, expr, tag):
+    """(int_tag expr dS) / (int_tag dS) over reference facets (no axisymmetric weight)."""
+    mesh = problem.mesh
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=problem.scene.facet_tags, metadata={"quadrature_degree": 8})
+    return integrate(expr, mesh, dx=ds(tag)) / integrate(fem.Constant(mesh, 1.0), mesh, dx=ds(tag))
+
+
+def tube_axisymmetric_scene(tube: Tube, n, pressure, follower=True, height=None):
+    """Plane-strain (lambda_z = 1) inflation in the r-z mode: the rectangle [Ri, Ro] x [0, height] (n x 1 crossed
+    cells, height = (Ro - Ri)/n), u_z = v_z = 0 on z = 0 and z = height, outer surface free, and on the inner
+    surface either a follower pressure p(t) (FollowerPressure, P N = -p J F^-T N) or the dead load of the same
+    magnitude (SurfaceLoad, P N = -p N). `pressure(t)` returns UFL. Facets: 1 inner, 2 outer, 3 ends."""
+    height = height or (tube.Ro - tube.Ri) / n
+    tol = 1e-12
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.array([tube.Ri, 0.0]), np.array([tube.Ro, height])], (n, 1),
+                                  diagonal=dmesh.DiagonalType.crossed)
+    ct = tag_cells(mesh, {1: lambda x: np.full(x.shape[1], True)})
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[0], tube.Ri, atol=tol),
+                           2: lambda x: np.isclose(x[0], tube.Ro, atol=tol),
+                           3: lambda x: np.isclose(x[1], 0.0, atol=tol) | np.isclose(x[1], height, atol=tol)})
+    if follower:
+        loads = dict(pressure_loads=[FollowerPressure([1], lambda X, t: pressure(t))])
+    else:
+        loads = dict(loads=[SurfaceLoad([1], lambda X, t, N: -pressure(t) * N)])
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)],
+                 dirichlet=[DirichletCondition("displacement", [3], components=[1]),
+                            DirichletCondition("velocity", [3], components=[1])],
+                 axisymmetric=True, name="mooney-rivlin-tube-rz", **loads)
+
+
+def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
+    """Plane-strain (lambda_z = 1) inflation in 3D: the quarter annulus Ri < r < Ro, x, y >= 0 (gmsh,
+    second-order geometry, size h) extruded by h into one layer of tetrahedra; u_x = v_x = 0 on x = 0,
+    u_y = v_y = 0 on y = 0, u_z = v_z = 0 on both end faces, outer surface free, and on the inner surface a
+    follower pressure p(t) (or the dead load P N = -p N). Facets: 1 inner, 2 outer, 3 x = 0, 4 y = 0, 5 ends."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("quarter-tube")
+        geo = gmsh.model.geo
+        c = geo.addPoint(0, 0, 0)
+        p1, p2, p3, p4 = (geo.addPoint(tube.Ri, 0, 0), geo.addPoint(tube.Ro, 0, 0), geo.addPoint(0, tube.Ro, 0),
+                          geo.addPoint(0, tube.Ri, 0))
+        curves = {4: geo.addLine(p1, p2), 2: geo.addCircleArc(p2, c, p3), 3: geo.addLine(p3, p4),
+                  1: geo.addCircleArc(p4, c, p1)}
+        surf = geo.addPlaneSurface([geo.addCurveLoop([curves[4], curves[2], curves[3], curves[1]])])
+        out = geo.extrude([(2, surf)], 0, 0, h, numElements=[1])
+        geo.synchronize()
+        # extrude returns [top, volume, then one lateral surface per bounding curve in curve-loop order]
+        top, vol, lateral = out[0][1], out[1][1], [e[1] for e in out[2:]]
+        gmsh.model.addPhysicalGroup(3, [vol], 1)
+        for tag, side in zip((4, 2, 3, 1), lateral):
+            gmsh.model.addPhysicalGroup(2, [side], tag)
+        gmsh.model.addPhysicalGroup(2, [surf, top], 5)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+    finally:
+        gmsh.finalize()
+    if follower:
+        loads = dict(pressure_loads=[FollowerPressure([1], lambda X, t: pressure(t))])
+    else:
+        loads = dict(loads=[SurfaceLoad([1], lambda X, t, N: -pressure(t) * N)])
+    dirichlet = [DirichletCondition(f, [tag], components=[comp])
+                 for tag, comp in ((3, 0), (4, 1), (5, 2)) for f in ("displacement", "velocity")]
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([1], tube.material)],
+                 dirichlet=dirichlet, name="mooney-rivlin-tube-3d", **loads)

@@ -4,12 +4,13 @@ from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, Time
 from .linear_solvers import BlockGaussSeidel
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
 from .problem import MonolithicFSI, NewtonDivergence, SolverOptions
-from .scene import DirichletCondition, FluidRegion, OpenBoundary, Scene, SolidRegion, SurfaceLoad
+from .scene import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, OpenBoundary, Scene, SolidRegion,
+                    SurfaceLoad)
 
 demote_compiler_logs()
 
 __all__ = [
-    "BlockGaussSeidel", "DirichletCondition", "FluidRegion", "LinearElastic", "MonolithicFSI", "MooneyRivlin",
-    "NewtonDivergence", "NewtonianFluid", "Observer", "OpenBoundary", "Scene", "SolidRegion",
-    "SolveFailure", "SolverOptions", "StepRecord", "SurfaceLoad", "TimeIntegrator", "TimeSettings",
+    "BlockGaussSeidel", "BodyForce", "DirichletCondition", "FluidRegion", "FollowerPressure", "LinearElastic",
+    "MonolithicFSI", "MooneyRivlin", "NewtonDivergence", "NewtonianFluid", "Observer", "OpenBoundary", "Scene",
+    "SolidRegion", "SolveFailure", "SolverOptions", "StepRecord", "SurfaceLoad", "TimeIntegrator", "TimeSettings",
 ]

@@ -135,3 +135,17 @@ def mesh_motion_residual(ops, kind, u, psi, stiffness, dx):
 def surface_load_residual(ops, traction, phi, ds):
     """-int t . phi dA for a traction t per reference area (paper eq. 21)."""
     return -ufl.dot(traction, ops.vec(phi)) * ops.weight * ds
+
+
+def follower_pressure_traction(ops, pressure, u):
+    """Traction per reference area of a pressure p on the deformed surface: P N = -p J F^-T N
+    (Cauchy traction -p n, Nanson n da = J F^-T N dA); it depends on u, so its linearisation enters the
+    Jacobian."""
+    F = deformation_gradient(ops, u)
+    return -pressure * ufl.det(F) * ufl.inv(F).T * ops.normal()
+
+
+def body_force_residual(ops, force, phi, dx):
+    """-int b . phi dV for a force b per reference volume (paper eq. 6 with a volume load; gravity
+    b = rho_0 g)."""
+    return -ufl.dot(force, ops.vec(phi)) * ops.weight * dx

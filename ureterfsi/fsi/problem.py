@@ -230,6 +230,11 @@ class MonolithicFSI:
         for load in scene.loads:
             R += physics.surface_load_residual(ops, load.traction(X_ref, self.t, ops.normal()), phi,
                                                ds(tuple(load.tags)))
+        for load in scene.pressure_loads:
+            traction = physics.follower_pressure_traction(ops, load.pressure(X_ref, self.t), u)
+            R += physics.surface_load_residual(ops, traction, phi, ds(tuple(load.tags)))
+        for load in scene.body_forces:
+            R += physics.body_force_residual(ops, load.force(X_ref, self.t), phi, dx(tuple(load.tags)))
         self.residual_form = fem.form(R)
         self.jacobian_form = fem.form(ufl.derivative(R, self.x))
 

@@ -1,8 +1,9 @@
 """A scene: everything the engine needs to know about one problem, as plain data.
 
 The engine knows nothing about ureters. A scene supplies a tagged mesh, the material of each tagged
-region, the open boundaries, the surface loads and the Dirichlet conditions. Time-dependent data are
-callables of (x, t) (interpolated each step) or of (X, t, N) returning UFL (evaluated in the forms).
+region, the open boundaries, the loads (dead surface tractions, follower pressures, body forces) and the
+Dirichlet conditions. Time-dependent data are callables of (x, t) (interpolated each step) or of (X, t[, N])
+returning UFL (evaluated in the forms).
 """
 from __future__ import annotations
 
@@ -43,6 +44,24 @@ class SurfaceLoad:
 
 
 @dataclass
+class FollowerPressure:
+    """Pressure on the deformed surface of tagged solid facets: the Cauchy traction -p n per current area,
+    i.e. P N = -p J F^-T N per reference area (Nanson), so it follows the deformation; p(X, t) a UFL scalar
+    (X reference coordinates, t a UFL constant time), p > 0 pushes into the solid."""
+    tags: Sequence[int]
+    pressure: Callable
+
+
+@dataclass
+class BodyForce:
+    """Force per unit reference volume on tagged solid cells: b(X, t), a UFL vector (3-vectors (r, theta, z)
+    in axisymmetric scenes). Gravity is b = rho_0 g with rho_0 the reference density: mass conservation
+    (rho J = rho_0) makes it the exact weight in any deformation."""
+    tags: Sequence[int]
+    force: Callable
+
+
+@dataclass
 class DirichletCondition:
     """Prescribed velocity (field 'velocity') or displacement (field 'displacement') on tagged facets.
 
@@ -63,7 +82,9 @@ class Scene:
     fluid: Optional[FluidRegion] = None
     solids: list = field(default_factory=list)
     open_boundaries: list = field(default_factory=list)
-    loads: list = field(default_factory=list)
+    loads: list = field(default_factory=list)             # SurfaceLoad (dead tractions)
+    pressure_loads: list = field(default_factory=list)    # FollowerPressure
+    body_forces: list = field(default_factory=list)       # BodyForce
     dirichlet: list = field(default_factory=list)
     axisymmetric: bool = False
     name: str = "scene"
@@ -76,6 +97,16 @@ class Scene:
     def __post_init__(self):
         if self.fluid is None and not self.solids:
             raise ValueError("a scene needs a fluid region, a solid region, or both")
+        for name, kind in (("loads", SurfaceLoad), ("pressure_loads", FollowerPressure),
+                           ("body_forces", BodyForce)):
+            for item in getattr(self, name):
+                if not isinstance(item, kind):
+                    raise TypeError(f"Scene.{name} holds {kind.__name__} items, got {type(item).__name__}")
+        solid_tags = {t for s in self.solids for t in s.tags}
+        for bf in self.body_forces:
+            if not set(bf.tags) <= solid_tags:
+                raise ValueError(f"BodyForce.tags {sorted(set(bf.tags) - solid_tags)} are not solid cell tags "
+                                 f"(solids: {sorted(solid_tags)})")
         for bc in self.dirichlet:
             if bc.field not in ("velocity", "displacement"):
                 raise ValueError(f"DirichletCondition.field must be 'velocity' or 'displacement', got {bc.field!r}")
