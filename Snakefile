@@ -15,9 +15,12 @@ configfile: "config/config.yaml"
 
 
 # Validation at the edge: one clear line naming the key and the constraint, non-zero exit, no output.
-from ureterfsi.config import ConfigError, validate_config
+# Every config file is re-read by read_yaml: Snakemake's loader lets a key given twice win silently.
+from ureterfsi.config import ConfigError, read_yaml, validate_config
 
 try:
+    for path in workflow.configfiles:
+        read_yaml(path)
     validate_config(config)
 except ConfigError as err:
     sys.stderr.write(f"{err}\n")
