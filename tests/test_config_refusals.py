@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from ureterfsi.config import ConfigError, load_config, load_config_files, main, unmakeable
+from ureterfsi.config import (ConfigError, load_config, load_config_files, main, read_config_args,
+                              unmakeable)
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT = REPO / "config" / "config.yaml"
@@ -295,6 +296,26 @@ def test_refused_by_a_dry_run(tmp_path, name):
     assert r.stderr.count("\n") == 1 and r.stderr.startswith(f"config error: {key}: "), r.stderr
     assert constraint in r.stderr, r.stderr
     assert not (tmp_path / "results").exists()
+
+
+def test_config_arguments_are_read_as_yaml():
+    # Snakemake's own parser gives {'solver': {'newton_max_iterations': '20'}, 'mesh': {'optimize': 'false'}}
+    assert read_config_args(["solver={newton_max_iterations: 20}", "mesh='{optimize: false}'", "time={dt: 0.005}",
+                             "time={end: 1.0}"]) == {"solver": {"newton_max_iterations": 20},
+                                                     "mesh": {"optimize": False}, "time": {"dt": 0.005, "end": 1.0}}
+    for entry, message in [("time={dt: 0,005}", "config error: time.dt: decimal comma in 0,005 (--config time:1)"),
+                           ("time={dt: 0.01, dt: 0.02}", "config error: time.dt: key given twice (--config time:1"),
+                           ("time={dt: 0.01", "config error: --config time:1:10: YAML syntax error")]:
+        with pytest.raises(ConfigError) as exc:
+            read_config_args([entry])
+        assert str(exc.value).startswith(message), exc.value
+
+
+def test_nested_config_argument_is_typed_in_a_dry_run(tmp_path):
+    r = _snakemake(tmp_path, "--configfile", DEFAULT, "--config", "solver={newton_max_iterations: 20}",
+                   "mesh={optimize: false}")
+    assert r.returncode == 0 and r.stderr == "", r.stderr       # was: must be of type integer, got str '20'
+    assert "rule solve:" in r.stdout
 
 
 @pytest.mark.parametrize("target,line", [

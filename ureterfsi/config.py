@@ -709,23 +709,16 @@ def _check_nodes(node, path: tuple, name: str, text: str) -> None:
                                          f"number ({_where(name, node)}): write {node.value.lstrip('0') or '0'}")
 
 
-def read_yaml(path) -> dict:
-    """The mapping of a YAML file as Snakemake reads it (PyYAML safe loader), refusing syntax errors (as
-    file:line:column), duplicate keys, decimal commas in flow style and leading-zero integers."""
-    name = str(path)
-    try:
-        text = Path(path).read_text()
-    except FileNotFoundError:
-        raise ConfigError(name, "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(name, f"cannot read the file: {exc}") from None
+def _load_yaml(text: str, name: str, path: tuple = ()):
+    """The YAML document `text` (None if empty) by PyYAML's safe loader, refusing syntax errors (as
+    name:line:column), duplicate keys, decimal commas in flow style and leading-zero integers."""
     loader = yaml.SafeLoader(text)
     try:
         node = loader.get_single_node()
         if node is None:
-            return {}
-        _check_nodes(node, (), name, text)
-        data = loader.construct_document(node)
+            return None
+        _check_nodes(node, path, name, text)
+        return loader.construct_document(node)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"{name}:{mark.line + 1}:{mark.column + 1}" if mark else name
@@ -735,9 +728,34 @@ def read_yaml(path) -> dict:
         raise ConfigError(name, f"YAML error: {exc}") from None
     finally:
         loader.dispose()
+
+
+def read_yaml(path) -> dict:
+    """The mapping of a YAML file as Snakemake reads it (PyYAML safe loader), with the refusals of _load_yaml."""
+    name = str(path)
+    try:
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise ConfigError(name, "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(name, f"cannot read the file: {exc}") from None
+    data = _load_yaml(text, name)
+    if data is None:
+        return {}
     if not isinstance(data, dict):
         raise ConfigError(name, f"must be a YAML mapping of sections, got {type(data).__name__}")
     return data
+
+
+def read_config_args(entries) -> dict:
+    """The overrides of ``snakemake --config KEY=VALUE ...``, each VALUE read like a config file (_load_yaml).
+    Snakemake reads a nested VALUE with PyYAML's BaseLoader, every scalar a string: ``solver='{newton_max_iterations:
+    20}'`` arrived as '20' and was refused as not an integer, ``mesh='{optimize: false}'`` as not a boolean."""
+    out: dict = {}
+    for entry in entries or ():
+        key, _, text = entry.partition("=")
+        out = deep_merge(out, {key: _load_yaml(text.strip("'\""), f"--config {key}", (key,))})
+    return out
 
 
 def schema_defaults(section: str) -> dict:
