@@ -32,6 +32,11 @@ CATALOGUE = [
     ("null_value", "time: {dt: ~}\n", "time.dt", "must be of type number, got NoneType None"),
     ("not_a_number", "fluid: {density: .nan}\n", "fluid.density", "must be a finite number, got nan"),
     ("infinite", "time: {end: .inf}\n", "time.end", "must be a finite number, got inf"),
+    ("empty_section", "solver:\n", "solver", "must be of type object, got NoneType None"),
+    ("level_as_number", "mesh: {levels: {coarse: 1.0}}\n", "mesh.levels.coarse", "must be of type object, got float 1"),
+    ("label_as_number", 'models: {"2": {label: 5}}\n', "models.2.label", "must be of type string, got int 5"),
+    ("unicode_minus", "geometry: {length: \u22120.05}\n", "geometry.length", "must be of type number, got str"),
+    ("file_is_a_number", "42\n", "refusal.yaml", "must be a YAML mapping of sections, got int"),
     ("top_level_list", "- time\n", "refusal.yaml", "must be a YAML mapping of sections, got list"),
     # ---- integers written as floats
     ("newton_iterations_float", "solver: {newton_max_iterations: 15.0}\n", "solver.newton_max_iterations",
@@ -100,6 +105,13 @@ CATALOGUE = [
     ("level_name", "study: {level: ultra}\n", "study.level", "must be one of mesh.levels"),
     ("fidelity_hyphen", "study: {fidelity: one-way}\n", "study.fidelity", "must be one of fully_coupled, one_way"),
     ("symmetry_capitalised", "mesh: {symmetry: Quarter}\n", "mesh.symmetry", "got 'Quarter'"),
+    ("runs_key_misspelt", 'study: {runs: {"2": {symetry: half}}}\n', "study.runs.2.symetry",
+     "unknown key (misspelt?); allowed keys: symmetry, fidelity"),
+    ("figure_domain_model", 'figures: {domain_model: "9"}\n', "figures.domain_model", "must be one of models"),
+    ("ladder_model_as_number", "ladder: {model: 3}\n", "ladder.model", "must be of type string, got int 3"),
+    ("dpi_too_high", "figures: {dpi: 6000}\n", "figures.dpi", "must be <= 600, got 6000"),
+    ("scene_without_quantities", "scenes: {fig04_outlet_flow: {quantities: [], tolerance: 0.05}}\n",
+     "scenes.fig04_outlet_flow.quantities", "must have at least 1 entry, got 0"),
     ("runs_of_unknown_model", 'study: {runs: {"9": {fidelity: one_way}}}\n', "study.runs.9", "must be a key of models"),
     # ---- duplicate keys
     ("duplicate_key_flow", "time: {dt: 0.01, dt: 0.02}\n", "time.dt", "key given twice ("),
@@ -187,6 +199,8 @@ CATALOGUE = [
      "design_studies.s1.grid.parameters.hole_pair_rotation", "not yet supported"),
     ("design_reserved_name", DS.replace("s1", "meshes") + "    grid: {parameters: {hole_diameter: [5.0e-4]}}\n",
      "design_studies.meshes", "reserved"),
+    ("design_without_parameters", DS + "    grid: {parameters: {}}\n", "design_studies.s1.grid.parameters",
+     "must have at least 1 entry, got 0"),
     ("design_repeated_values", DS + "    grid: {parameters: {hole_diameter: [5.0e-4, 5.0e-4]}}\n",
      "design_studies.s1.grid.parameters.hole_diameter", "values must be distinct"),
     # ---- stability section
@@ -205,6 +219,8 @@ CATALOGUE = [
      "must be > time.dt = 0.01 s"),
     ("stability_speed_in_cm_per_s", "stability: {axes: {wave_speed: [2.0]}}\n", "stability.axes.wave_speed[0]",
      "in cm/s? that is 0.02 m/s"),
+    ("stability_hole_model_unknown", 'stability: {holes: {model: "9"}}\n', "stability.holes.model",
+     "must be one of models ['1', '2', '3', '4'], got '9'"),
     ("stability_energy_safety", "stability: {energy_safety: 0.5}\n", "stability.energy_safety", "must be >= 1"),
     # ---- fields section
     ("fields_quantity", "fields: {quantities: [velocity, vorticity]}\n", "fields.quantities[1]", "got 'vorticity'"),
