@@ -24,7 +24,8 @@ CATALOGUE = [
     # ---- wrong types
     ("length_with_unit", 'geometry: {length: "50 mm"}\n', "geometry.length", "must be of type number, got str '50 mm'"),
     ("dt_with_unit", "time:\n  dt: 10ms\n", "time.dt", "must be of type number, got str '10ms'"),
-    ("model_key_as_int", "study: {convergence_model: 3}\n", "study.convergence_model", "must be of type string, got int 3"),
+    ("model_key_as_int", "study: {convergence_model: 3}\n", "study.convergence_model",
+     "must be of type string, got int 3"),
     ("models_key_unquoted", 'models: {5: {label: x, stent: true, hole_pair_spacing: 0.025, holes: 6}}\n',
      "models.5", 'keys must be strings, got int 5 (quote it: "5")'),
     ("bool_as_string", 'mesh: {optimize: "true"}\n', "mesh.optimize", "must be of type boolean, got str 'true'"),
@@ -66,7 +67,8 @@ CATALOGUE = [
      "1 m is outside the plausible range [1e-06, 0.01] m"),
     ("viscosity_in_cP", "fluid: {dynamic_viscosity: 1.3}\n", "fluid.dynamic_viscosity",
      "in mPa s (cP)? that is 0.0013 Pa s"),
-    ("traction_in_kPa", "peristalsis: {peak_traction: 50.0}\n", "peristalsis.peak_traction", "in kPa? that is 50000 Pa"),
+    ("traction_in_kPa", "peristalsis: {peak_traction: 50.0}\n", "peristalsis.peak_traction",
+     "in kPa? that is 50000 Pa"),
     ("speed_in_cm_per_s", "peristalsis: {speed: 2.0}\n", "peristalsis.speed", "in cm/s? that is 0.02 m/s"),
     ("density_in_g_per_cm3", "fluid: {density: 1.05}\n", "fluid.density", "in g/cm^3? that is 1050 kg/m^3"),
     ("spacing_in_mm", 'models: {"4": {hole_pair_spacing: 25.0}}\n', "models.4.hole_pair_spacing",
@@ -92,7 +94,8 @@ CATALOGUE = [
     ("decimal_comma_list_middle", "figures: {wave_times: [0.5, 1,0, 2.0, 2.5]}\n", "figures.wave_times[1]",
      "decimal comma in 1,0 ("),
     # ---- misspelt keys and names
-    ("misspelt_key", "solver: {newton_rtoll: 1.0e-8}\n", "solver.newton_rtoll", "unknown key (misspelt?); allowed keys:"),
+    ("misspelt_key", "solver: {newton_rtoll: 1.0e-8}\n", "solver.newton_rtoll",
+     "unknown key (misspelt?); allowed keys:"),
     ("misspelt_section", "geometri: {length: 0.05}\n", "geometri", "unknown key (misspelt?)"),
     ("misspelt_scene", "scenes: {fig04_outflow: {quantities: [outlet_flux], tolerance: 0.05}}\n",
      "scenes.fig04_outflow", "unknown key (misspelt?); allowed keys: fig03_mesh_convergence"),
@@ -239,7 +242,8 @@ CATALOGUE = [
      "outside the plausible range [1, 200]"),
     ("step_halvings_negative", "solver: {max_step_halvings: -1}\n", "solver.max_step_halvings", "must be >= 0"),
     # ---- YAML syntax
-    ("unclosed_flow_mapping", "time: {dt: 0.01\n", "refusal.yaml:2:1", "YAML syntax error: while parsing a flow mapping"),
+    ("unclosed_flow_mapping", "time: {dt: 0.01\n", "refusal.yaml:2:1",
+     "YAML syntax error: while parsing a flow mapping"),
     ("tab_indentation", "time:\n\tdt: 0.01\n", "refusal.yaml:2:1", "found character '\\t' that cannot start any token"),
 ]
 IDS = [c[0] for c in CATALOGUE]
