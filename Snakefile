@@ -15,9 +15,14 @@ configfile: "config/config.yaml"
 
 
 # Validation at the edge: one clear line naming the key and the constraint, non-zero exit, no output.
-from ureterfsi.config import ConfigError, validate_config
+# Every config file is re-read by read_yaml (Snakemake's loader lets a key given twice win silently), and the
+# --config values by read_config_args (Snakemake's parser makes every nested scalar a string).
+from ureterfsi.config import ConfigError, deep_merge, read_config_args, read_yaml, validate_config
 
 try:
+    for path in workflow.configfiles:
+        read_yaml(path)
+    config.update(deep_merge(config, read_config_args(workflow.config_settings.config_args)))
     validate_config(config)
 except ConfigError as err:
     sys.stderr.write(f"{err}\n")

@@ -495,6 +495,11 @@ def check_ladder(cfg):
         if rung["dt"] > lad["end"]:
             raise ConfigError(f"ladder.rungs.{name}.dt", f"must be <= ladder.end = {_fmt(lad['end'])} s, "
                                                          f"got {_fmt(rung['dt'])}")
+    first = cfg["time"]["probe_times"][0]
+    if not lad["end"] >= first * (1 - RTOL):
+        raise ConfigError("ladder.end", f"must be >= the first of time.probe_times, {_fmt(first)} s (the snapshot "
+                                        f"quantities are compared at the probe times within the window), "
+                                        f"got {_fmt(lad['end'])}")
 
 
 def check_figures(cfg):
@@ -537,6 +542,9 @@ def check_stability(cfg):
         if not (models[model]["stent"] and models[model]["holes"]):
             raise ConfigError("stability.holes.model", f"model {model!r} has no side holes: the hole_elements "
                                                        f"axis needs a stented model with holes")
+    if not cfg["time"]["dt"] < st["end"]:
+        raise ConfigError("stability.end", f"must be > time.dt = {_fmt(cfg['time']['dt'])} s (the baseline case's "
+                                           f"time step), got {_fmt(st['end'])}")
     for i, dt in enumerate(st["axes"].get("time_step", [])):
         if not dt < st["end"]:
             raise ConfigError(f"stability.axes.time_step[{i}]",
@@ -579,6 +587,21 @@ def validate_config(cfg: dict) -> None:
         check(cfg)
     from ureterfsi.designs import check_design_studies  # each design point validated as a config of its own
     check_design_studies(cfg)
+
+
+def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
+    """Why the mesh of `model` at `level` in `symmetry` (and so every run on it) cannot be made, '' if it can: a
+    model of `models`, a level of `mesh.levels`, and the axisymmetric (r-z) section only of a stent-free model."""
+    models, levels = cfg["models"], cfg["mesh"]["levels"]
+    if model not in models:
+        return f"model {model!r} is not one of models {sorted(models, key=int)}"
+    if level not in levels:
+        return f"level {level!r} is not one of mesh.levels {list(levels)}"
+    if symmetry == "axisymmetric" and models[model]["stent"]:
+        free = [m for m in sorted(models, key=int) if not models[m]["stent"]]
+        return (f"model {model} has a stent: the axisymmetric (r-z) section is only for the stent-free models "
+                f"{free} (side holes break rotational symmetry)")
+    return ""
 
 
 # the geometry the r-z wall solve reads (ureterfsi.calibration.WallModel): the stent and its holes do not enter
@@ -626,8 +649,25 @@ def _where(name: str, node) -> str:
     return f"{name}:{node.start_mark.line + 1}"
 
 
+def _between(text: str, a, b) -> str:
+    return text[a.end_mark.index:b.start_mark.index]
+
+
 def _comma_between(text: str, a, b) -> bool:
-    return text[a.end_mark.index:b.start_mark.index].strip() == ","
+    return _between(text, a, b).strip() == ","
+
+
+def _list_decimal_comma(text: str, items: list, i: int) -> bool:
+    """Items i-1, i of a flow sequence are one number with a decimal comma: ``[0,005]`` (YAML 1.1: [0, 5], the
+    second with a leading zero) or ``[0,5, 1.0]`` (two integers joined by a bare ',' in a list whose other
+    separators have a blank; ``[1,2,3]`` is not flagged)."""
+    a, b = items[i - 1], items[i]
+    if not (_plain_number(a) and _plain_number(b) and b.tag == _INT_TAG and _comma_between(text, a, b)):
+        return False
+    if _LEADING_ZERO.fullmatch(b.value):
+        return True
+    return (a.tag == _INT_TAG and _between(text, a, b) == ","
+            and any(_between(text, x, y) != "," for x, y in zip(items, items[1:])))
 
 
 def _check_nodes(node, path: tuple, name: str, text: str) -> None:
@@ -657,9 +697,7 @@ def _check_nodes(node, path: tuple, name: str, text: str) -> None:
             prev = (knode.value, vnode)
     elif isinstance(node, yaml.SequenceNode):
         for i, item in enumerate(node.value):
-            if (node.flow_style and i and _plain_number(node.value[i - 1]) and _plain_number(item)
-                    and item.tag == _INT_TAG and _LEADING_ZERO.fullmatch(item.value)
-                    and _comma_between(text, node.value[i - 1], item)):
+            if node.flow_style and i and _list_decimal_comma(text, node.value, i):
                 a = node.value[i - 1].value
                 raise ConfigError(_dotted(path + (i - 1,)),
                                   f"decimal comma in {a},{item.value} ({_where(name, item)}): write {a}.{item.value} "
@@ -671,23 +709,16 @@ def _check_nodes(node, path: tuple, name: str, text: str) -> None:
                                          f"number ({_where(name, node)}): write {node.value.lstrip('0') or '0'}")
 
 
-def read_yaml(path) -> dict:
-    """The mapping of a YAML file as Snakemake reads it (PyYAML safe loader), refusing syntax errors (as
-    file:line:column), duplicate keys, decimal commas in flow style and leading-zero integers."""
-    name = str(path)
-    try:
-        text = Path(path).read_text()
-    except FileNotFoundError:
-        raise ConfigError(name, "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(name, f"cannot read the file: {exc}") from None
+def _load_yaml(text: str, name: str, path: tuple = ()):
+    """The YAML document `text` (None if empty) by PyYAML's safe loader, refusing syntax errors (as
+    name:line:column), duplicate keys, decimal commas in flow style and leading-zero integers."""
     loader = yaml.SafeLoader(text)
     try:
         node = loader.get_single_node()
         if node is None:
-            return {}
-        _check_nodes(node, (), name, text)
-        data = loader.construct_document(node)
+            return None
+        _check_nodes(node, path, name, text)
+        return loader.construct_document(node)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"{name}:{mark.line + 1}:{mark.column + 1}" if mark else name
@@ -697,9 +728,34 @@ def read_yaml(path) -> dict:
         raise ConfigError(name, f"YAML error: {exc}") from None
     finally:
         loader.dispose()
+
+
+def read_yaml(path) -> dict:
+    """The mapping of a YAML file as Snakemake reads it (PyYAML safe loader), with the refusals of _load_yaml."""
+    name = str(path)
+    try:
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise ConfigError(name, "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(name, f"cannot read the file: {exc}") from None
+    data = _load_yaml(text, name)
+    if data is None:
+        return {}
     if not isinstance(data, dict):
         raise ConfigError(name, f"must be a YAML mapping of sections, got {type(data).__name__}")
     return data
+
+
+def read_config_args(entries) -> dict:
+    """The overrides of ``snakemake --config KEY=VALUE ...``, each VALUE read like a config file (_load_yaml).
+    Snakemake reads a nested VALUE with PyYAML's BaseLoader, every scalar a string: ``solver='{newton_max_iterations:
+    20}'`` arrived as '20' and was refused as not an integer, ``mesh='{optimize: false}'`` as not a boolean."""
+    out: dict = {}
+    for entry in entries or ():
+        key, _, text = entry.partition("=")
+        out = deep_merge(out, {key: _load_yaml(text.strip("'\""), f"--config {key}", (key,))})
+    return out
 
 
 def schema_defaults(section: str) -> dict:
@@ -744,4 +800,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # the package's module, not this __main__ copy, whose ConfigError is another class than the one
+    # ureterfsi.designs raises (a design-study error was a traceback)
+    from ureterfsi.config import main as package_main
+
+    sys.exit(package_main())

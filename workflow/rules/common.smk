@@ -1,4 +1,7 @@
 # Shared helpers of the workflow rules: wildcard constraints and lists derived from the config.
+import sys
+
+from ureterfsi.config import unmakeable
 
 MODELS = sorted(config["models"])
 LEVELS = list(config["mesh"]["levels"])
@@ -51,8 +54,19 @@ def solve_mem_mb(fidelity, symmetry, level):
     return int(per_level.get(level, max(per_level.values())) * table["symmetry_factor"][symmetry])
 
 
+def refuse_unmakeable(w):
+    """Input function (no input) of rule mesh: a mesh the configuration cannot make, and so every run on it, is
+    refused before any job starts, in one line on stderr (an exception here would print a traceback)."""
+    reason = unmakeable(config, w.model, w.level, w.symmetry)
+    if reason:
+        sys.stderr.write(f"target error: results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh: {reason}\n")
+        sys.exit(2)
+    return []
+
+
+# model and level as the schema spells them (not only the configured ones): refuse_unmakeable names the reason
 wildcard_constraints:
-    model="|".join(MODELS),
-    level="|".join(LEVELS),
+    model="[1-9][0-9]*",
+    level="[A-Za-z][A-Za-z0-9_]*",
     symmetry="full|half|quarter|axisymmetric",
     fidelity="fully_coupled|one_way",

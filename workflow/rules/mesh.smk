@@ -5,6 +5,8 @@ AXISYMMETRIC_MODELS = [m for m in MODELS if not config["models"][m]["stent"]]
 
 
 rule mesh:
+    input:
+        refuse_unmakeable,
     output:
         msh="results/meshes/{symmetry}/model{model}_{level}.msh",
         json="results/meshes/{symmetry}/model{model}_{level}.json",
