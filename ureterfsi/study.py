@@ -90,7 +90,7 @@ class CoupledStent:
         if stent.kinematics != "linear":
             F = physics.deformation_gradient(pb.ops, u)
             sigma = sigma * F.T / ufl.det(F)
-        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb._cells([tags.STENT]))
+        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb.cells([tags.STENT]))
         self.probe = PointProbe(pb.mesh, probe_points)
 
     def update(self, pb: MonolithicFSI) -> None:
@@ -154,7 +154,7 @@ class UreterProbes(Observer):
             self.hole_form = fem.form(J * ufl.dot(ufl.inv(F) * rel, grad_chi) * ufl.TestFunction(Q) * dx(tags.FLUID))
             self.hole_vec = fem_petsc.create_vector(self.hole_form)
             n_local = mesh.topology.index_map(mesh.topology.dim).size_local
-            fluid = pb._cells([tags.FLUID])
+            fluid = pb.cells([tags.FLUID])
             fluid = fluid[fluid < n_local]
             mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
             Rm = np.hypot(mid[:, 0], mid[:, 1])
