@@ -111,6 +111,11 @@ def test_crushing_load_inverts_the_fluid_mesh():
     m = re.search(r"ALE mesh inverted at t=(\S+) s \(step (\d+)\): minimum Jacobian (\S+) <= 0.0", msg)
     assert m, msg
     assert 0.0 < float(m.group(1)) < 0.1 and float(m.group(3)) <= 0.0
+    # where: a vertex of the reference mesh, with the Jacobian the guard saw
+    jmin, xyz = pb.min_ale_jacobian_at()
+    assert jmin == pb.min_ale_jacobian() == info.value.min_jacobian
+    X = pb.mesh.geometry.x
+    assert np.min(np.linalg.norm(X - np.asarray(xyz), axis=1)) < 1e-12
 
 
 # ---------------------------------------------------------------------------------------------

@@ -620,6 +620,21 @@ class MonolithicFSI:
         local = self._jac_fn.x.array[self._jac_dofs].min() if self._jac_dofs.size else np.inf
         return float(self.comm.allreduce(local, MPI.MIN))
 
+    def min_ale_jacobian_at(self):
+        """(minimum ALE Jacobian, reference coordinates (x, y, z) of its fluid vertex), reduced over ranks;
+        a non-finite Jacobian counts as -inf (a scene without fluid: (1, NaN))."""
+        if self.min_jacobian_expr is None:
+            return 1.0, (math.nan,) * 3
+        self._jac_fn.interpolate(self.min_jacobian_expr)
+        vals = self._jac_fn.x.array[self._jac_dofs]
+        local = (math.inf, (math.nan,) * 3)
+        if vals.size:
+            bad = ~np.isfinite(vals)
+            i = int(np.argmax(bad)) if bad.any() else int(np.argmin(vals))
+            xyz = self._jac_fn.function_space.tabulate_dof_coordinates()[self._jac_dofs[i]]
+            local = (-math.inf if bad.any() else float(vals[i]), tuple(float(c) for c in xyz))
+        return min(self.comm.allgather(local), key=lambda item: item[0])
+
     # ---------------------------------------------------------------------------------------
     def _assemble_residual(self):
         t0 = _time.perf_counter()
