@@ -63,7 +63,8 @@ def private_accesses(sources: dict, exempt=frozenset(), owner: str | None = None
         pkg = package_of(path)
         for node in ast.walk(ast.parse(src)):
             if isinstance(node, ast.Attribute):
-                hits = [node.attr] if not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")) else []
+                own = isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")
+                hits = [] if own else [node.attr]
             elif isinstance(node, ast.ImportFrom):
                 hits = [a.name for a in node.names]
             else:

@@ -80,7 +80,8 @@ VARIABLES = {
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
     # the stability matrix (ureterfsi.stability): per recorded state of a case
     "dt": ("s", "length of the accepted time step (0 for the initial state)"),
-    "kinetic_energy": ("J", "kinetic energy of urine and wall: int_fluid 1/2 rho |v|^2 dx + int_wall 1/2 rho0 |v|^2 dX"),
+    "kinetic_energy": ("J", "kinetic energy of urine and wall: int_fluid 1/2 rho |v|^2 dx + int_wall 1/2 rho0 |v|^2 "
+                            "dX"),
     "kinetic_energy_fluid": ("J", "kinetic energy of the urine, int 1/2 rho |v|^2 J dX (whole tube)"),
     "kinetic_energy_solid": ("J", "kinetic energy of the ureter wall, int 1/2 rho0 |v|^2 dX (whole tube)"),
     "elastic_energy": ("J", "strain energy of the ureter wall, int W(F) dX (Mooney-Rivlin, >= 0)"),
@@ -91,7 +92,8 @@ VARIABLES = {
                          "(R: residual without boundary conditions)"),
     "external_work": ("J", "W(t) = int_0^t |load power| + |open-boundary power| + |prescribed power| dt "
                       "(rectangle rule)"),
-    "volume_from_flux": ("m3", "V(0) - int_0^t (Q_out - Q_in) dt, the flux integrated with the BDF weights of each step"),
+    "volume_from_flux": ("m3", "V(0) - int_0^t (Q_out - Q_in) dt, the flux integrated with the BDF weights of each "
+                              "step"),
     "volume_balance_error": ("m3", "|V(t) - V(0) + int_0^t (Q_out - Q_in) dt|"),
     "max_displacement": ("m", "largest nodal displacement component over wall and ALE mesh"),
     "max_speed": ("m s-1", "largest nodal speed |v| (a local instability shows here before it shows in the "

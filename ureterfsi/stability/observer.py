@@ -43,7 +43,8 @@ class StabilityObserver(Observer):
         n_da = J * ufl.inv(F).T * ops.normal()
         w = ops.weight
         forms = flux_volume_forms(pb)
-        forms["kinetic_energy_fluid"] = 0.5 * sc.fluid.material.density * ufl.dot(V, V) * J * w * dx(tuple(pb.fluid_tags))
+        rho = sc.fluid.material.density
+        forms["kinetic_energy_fluid"] = 0.5 * rho * ufl.dot(V, V) * J * w * dx(tuple(pb.fluid_tags))
         ke_s, el = 0, 0   # stay 0 (recorded as 0.0) in a fluid-alone scene
         for solid in sc.solids:
             mat, dxs = solid.material, dx(tuple(solid.tags))
