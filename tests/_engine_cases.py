@@ -161,7 +161,7 @@ class Quantities:
         # wall displacement: owned dofs of the collapsed displacement space in wall cells
         self._Vu, _ = pb.W.sub(pb.index["displacement"]).collapse()
         tdim = mesh.topology.dim
-        wall_cells = pb._cells([WALL])
+        wall_cells = pb.cells([WALL])
         dofs = fem.locate_dofs_topological(self._Vu, tdim, wall_cells)
         self._wall_dofs = dofs[dofs < self._Vu.dofmap.index_map.size_local]
 

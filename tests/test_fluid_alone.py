@@ -238,7 +238,7 @@ def test_segregated_flow_block_lu_failure_is_reported():
     flow_size = pb.ksp.getPC().getFieldSplitSubKSP()[1].getOperators()[0].getSize()[0]
     mirror = pb.mesh_space.dofmap.index_map.size_global * pb.mesh_space.dofmap.index_map_bs
     assert flow_size == pb.unknowns - mirror
-    pb._factor_matrix().setMumpsIcntl(23, 1)        # the flow block's factor, capped at 1 MB
+    pb.factor_matrix().setMumpsIcntl(23, 1)        # the flow block's factor, capped at 1 MB
     pb.invalidate_jacobian()
     with pytest.raises(NewtonDivergence, match=r"linear solve failed \(PETSc KSP reason -11\); MUMPS INFOG\(1\) = -"):
         pb.step(2e-3)
@@ -406,3 +406,28 @@ def test_failed_extrapolation_is_retried_from_the_previous_state(caplog):
     assert caplog.text.count("retrying from the previous state") == 2
     v, v_ref = pb.field("velocity").x.array, ref.field("velocity").x.array
     assert np.max(np.abs(v - v_ref)) <= 1e-8 * np.max(np.abs(v_ref))
+
+
+@pytest.mark.parametrize("coupling", ["monolithic", "segregated"])
+def test_posed_newton_system_is_the_one_the_step_solves(coupling):
+    """pose_newton_system(dt) gives the Newton system of the next step as the engine assembles it: its
+    residual norm is the step's first and its solution the step's first update (newton_rtol = 1: the step
+    takes one Newton iteration from the previous state)."""
+    from petsc4py import PETSc
+
+    dt = 2e-3
+    _, _, pb = run(dt, 2, coupling, predictor="constant", newton_rtol=1.0, reuse_jacobian=False)
+    A, b = pb.pose_newton_system(dt)
+    first = b.norm()
+    ksp = PETSc.KSP().create(pb.comm)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    update = b.duplicate()
+    ksp.solve(b, update)
+    expected = pb.x.vector.copy()
+    expected.axpy(-1.0, update)
+    its, history = pb.step(dt)
+    assert its == 1 and history[0] == pytest.approx(first, rel=1e-12)
+    assert (pb.x.vector - expected).norm() <= 1e-10 * expected.norm()

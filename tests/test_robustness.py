@@ -11,6 +11,7 @@ import pytest
 
 from _engine_cases import QoIObserver, Quantities, tube_problem
 from ureterfsi.fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings
+from ureterfsi.fsi.integrator import MeshInversion, StepFailure
 
 DT = 0.005
 
@@ -35,7 +36,8 @@ def test_failed_step_is_retried_with_half_dt_and_dt_grows_back(caplog):
     pb, case = tube_problem(options=SolverOptions(newton_max_iterations=3, newton_rtol=2e-8))
     case.amplitude.value = 3.0e4
     caplog.set_level(logging.INFO, logger="ureterfsi.fsi")
-    records = TimeIntegrator(pb, TimeSettings(end=0.04, dt=0.01, max_halvings=2)).run()
+    integ = TimeIntegrator(pb, TimeSettings(end=0.04, dt=0.01, max_halvings=2))
+    records = integ.run()
     dts = [r.dt for r in records]
     assert dts == pytest.approx([0.005, 0.005, 0.01, 0.01, 0.01], rel=1e-12)
     assert [r.step for r in records] == [1, 2, 3, 4, 5]
@@ -43,6 +45,8 @@ def test_failed_step_is_retried_with_half_dt_and_dt_grows_back(caplog):
     assert all(r.newton_iterations <= 3 for r in records)
     retries = [m.getMessage() for m in caplog.records if "retrying with dt/2" in m.getMessage()]
     assert len(retries) == 1 and "step 1" in retries[0] and "dt=0.01 s" in retries[0]
+    assert [(a.step, a.dt, a.halved) for a in integ.failed_attempts] == [(1, 0.01, True)]
+    assert integ.failed_attempts[0].time == pytest.approx(0.01, rel=1e-12)
 
 
 def test_unrecoverable_step_raises_solve_failure_with_time_step_and_history():
@@ -65,6 +69,9 @@ def test_unrecoverable_step_raises_solve_failure_with_time_step_and_history():
     history = re.search(r"residual history (.*)$", msg).group(1).split(", ")
     assert len(history) == 2 and all(math.isfinite(float(h)) and float(h) > 0 for h in history)
     assert pb.time == pytest.approx(0.01) and len(integ.records) == 2
+    assert isinstance(info.value, StepFailure) and len(info.value.cause.history) == 2
+    assert [(a.step, a.halved) for a in integ.failed_attempts] == [(3, True), (3, False)]
+    assert [a.time for a in integ.failed_attempts] == pytest.approx([0.015, 0.0125], rel=1e-12)
     np.testing.assert_array_equal(pb.x.x.array, pb.x_n.x.array)
 
 
@@ -79,6 +86,8 @@ def test_min_ale_jacobian_threshold_stops_the_run():
     assert "ALE mesh inverted at t=0.005 s (step 1)" in msg
     m = re.search(r"minimum Jacobian (\S+) <= 0.9999", msg)
     assert m and 0.999 < float(m.group(1)) < 0.9999
+    assert isinstance(info.value, MeshInversion) and info.value.time == pytest.approx(0.005)
+    assert info.value.min_jacobian == pytest.approx(float(m.group(1)), rel=1e-3)
 
 
 def test_min_ale_jacobian_is_finite_on_the_axis():
@@ -102,6 +111,11 @@ def test_crushing_load_inverts_the_fluid_mesh():
     m = re.search(r"ALE mesh inverted at t=(\S+) s \(step (\d+)\): minimum Jacobian (\S+) <= 0.0", msg)
     assert m, msg
     assert 0.0 < float(m.group(1)) < 0.1 and float(m.group(3)) <= 0.0
+    # where: a vertex of the reference mesh, with the Jacobian the guard saw
+    jmin, xyz = pb.min_ale_jacobian_at()
+    assert jmin == pb.min_ale_jacobian() == info.value.min_jacobian
+    X = pb.mesh.geometry.x
+    assert np.min(np.linalg.norm(X - np.asarray(xyz), axis=1)) < 1e-12
 
 
 # ---------------------------------------------------------------------------------------------

@@ -248,7 +248,7 @@ class WallModel:
                 self._steady()
             except NewtonDivergence:
                 pb.x.x.array[:] = saved
-                pb._jacobian_valid = False
+                pb.invalidate_jacobian()
                 halvings += 1
                 if halvings > max_halvings:
                     for c, v in zip(consts, self.state_params):

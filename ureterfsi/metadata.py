@@ -21,8 +21,8 @@ SOURCE = "ureterfsi: monolithic ALE fluid-structure interaction with FEniCSx (do
 REFERENCES = ("Numerical study of fully coupled fluid-structure interaction of stented ureter by varying the "
               "stent side-holes (the study reproduced; text in shared/paper/stented-ureter-fsi.txt)")
 
-# name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.oneway) and the study datasets
-# (ureterfsi.aggregate)
+# name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.oneway), the study datasets
+# (ureterfsi.aggregate) and the stability matrix (ureterfsi.stability)
 VARIABLES = {
     "time": ("s", "time"),
     "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
@@ -53,7 +53,7 @@ VARIABLES = {
     "model": ("1", "stent model number (paper Table 1)"),
     "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),
     "level": ("1", "mesh level (config mesh.levels)"),
-    "step": ("1", "index of the accepted time step"),
+    "step": ("1", "index of the time step (0: the initial state, where one is recorded)"),
     "hole": ("1", "index of the side hole, by axial position"),
     "cells": ("1", "number of cells of the mesh"),
     "dofs": ("1", "number of degrees of freedom of the monolithic system"),
@@ -78,6 +78,70 @@ VARIABLES = {
     "design": ("1", "design point id (hash of its parameter values)"),
     "point_id": ("1", "design point id (hash of its parameter values)"),
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
+    # the stability matrix (ureterfsi.stability): per recorded state of a case
+    "dt": ("s", "length of the accepted time step (0 for the initial state)"),
+    "kinetic_energy": ("J", "kinetic energy of urine and wall: int_fluid 1/2 rho |v|^2 dx + int_wall 1/2 rho0 |v|^2 "
+                            "dX"),
+    "kinetic_energy_fluid": ("J", "kinetic energy of the urine, int 1/2 rho |v|^2 J dX (whole tube)"),
+    "kinetic_energy_solid": ("J", "kinetic energy of the ureter wall, int 1/2 rho0 |v|^2 dX (whole tube)"),
+    "elastic_energy": ("J", "strain energy of the ureter wall, int W(F) dX (Mooney-Rivlin, >= 0)"),
+    "energy_bound": ("J", "E(0) + E_el(0) + W(t): the kinetic energy a dissipative system cannot exceed"),
+    "load_power": ("W", "power of the peristaltic load on the wall, int t . v dA"),
+    "open_boundary_power": ("W", "power of the prescribed normal stress on the open ends, -p_ref int v . n da"),
+    "prescribed_power": ("W", "power of the prescribed (Dirichlet) motion, sum_i R_i v_i over the velocity dofs "
+                         "(R: residual without boundary conditions)"),
+    "external_work": ("J", "W(t) = int_0^t |load power| + |open-boundary power| + |prescribed power| dt "
+                      "(rectangle rule)"),
+    "volume_from_flux": ("m3", "V(0) - int_0^t (Q_out - Q_in) dt, the flux integrated with the BDF weights of each "
+                              "step"),
+    "volume_balance_error": ("m3", "|V(t) - V(0) + int_0^t (Q_out - Q_in) dt|"),
+    "max_displacement": ("m", "largest nodal displacement component over wall and ALE mesh"),
+    "max_speed": ("m s-1", "largest nodal speed |v| (a local instability shows here before it shows in the "
+                  "kinetic energy)"),
+    "halving_time": ("s", "end time of each failed step attempt (retried with dt/2, or the last of a failed step)"),
+    # the stability matrix: per case
+    "case": ("1", "name of the stability case (<axis>_<value>, or baseline)"),
+    "axis": ("1", "the varied quantity (stability.axes key; baseline: none)"),
+    "value_label": ("1", "value of the varied quantity, as in the configuration"),
+    "outcome": ("1", "stable (ran to the end, energy bounded, volume conserved) or failed"),
+    "limit": ("1", "limit that ended a failed case: none, newton, nan, ale_inversion, energy, volume, wall_time, "
+                   "exception"),
+    "diagnosis": ("1", "what failed, when and where (empty if stable)"),
+    "failure_time": ("s", "time at which the limit was hit (NaN if stable)"),
+    "failure_r": ("m", "reference radial coordinate of the place of the failure (NaN if none)"),
+    "failure_z": ("m", "reference axial coordinate of the place of the failure (NaN if none)"),
+    "pulse_centre_at_failure": ("m", "axial position of the pulse centre at the failure time"),
+    "time_step": ("s", "nominal time step"),
+    "mesh_level": ("1", "mesh level (config mesh.levels)"),
+    "scene": ("1", "rz: r-z model, fully coupled; holes: 3D stented model, one-way (the urine alone)"),
+    "hole_elements": ("1", "elements across a side-hole diameter, hole_diameter / mesh size (NaN: no holes)"),
+    "hole_elements_measured": ("1", "hole diameter / mean edge length of the hole-wall triangles of the mesh "
+                               "(NaN: no holes)"),
+    "is_baseline": ("1", "1 for the baseline of the case's scene (r-z: baseline; 3D: the study's own mesh)"),
+    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.hole_channels)"),
+    "mesh_min_quality": ("1", "smallest signed inverse condition number (gmsh minSICN) of the mesh cells"),
+    "bulk_ratio": ("1", "kappa / (C10 + C01) of the ureter wall"),
+    "density_ratio": ("1", "ureter wall density / urine density"),
+    "peak_traction": ("Pa", "peak traction of the peristaltic pulse"),
+    "wave_speed": ("m s-1", "speed of the peristaltic pulse"),
+    "wave_width": ("m", "width of the peristaltic pulse (in peristalsis.width_measure)"),
+    "dynamic_viscosity": ("Pa s", "dynamic viscosity of the urine"),
+    "end_time": ("s", "time the case was to reach"),
+    "reached_time": ("s", "last accepted time"),
+    "steps": ("1", "number of accepted time steps"),
+    "max_kinetic_energy": ("J", "maximum over time of the kinetic energy"),
+    "max_energy_ratio": ("1", "maximum over time of kinetic energy / energy_bound (limit: stability.energy_safety)"),
+    "displaced_volume": ("m3", "volume the wave displaces, max over time of |V(t) - V(0)|"),
+    "volume_error": ("1", "maximum over time of the volume balance error relative to the displaced volume"),
+    "min_jacobian": ("1", "minimum over time of the minimum ALE Jacobian"),
+    "peak_displacement": ("m", "maximum over time of the largest nodal displacement component"),
+    "peak_speed": ("m s-1", "maximum over time of the largest nodal speed"),
+    "total_newton_iterations": ("1", "Newton iterations of all accepted steps"),
+    "mean_newton_iterations": ("1", "mean Newton iterations per accepted step"),
+    "max_newton_iterations": ("1", "largest number of Newton iterations of an accepted step"),
+    "step_halvings": ("1", "number of failed step attempts retried with dt/2 (engine retries)"),
+    "factorisations": ("1", "LU factorisations of the Jacobian"),
+    "wall_time_per_step": ("s", "mean wall-clock time per accepted step"),
 }
 
 # CF standard names (CF standard name table) of the variables that have one

@@ -11,6 +11,9 @@ import ufl
 from dolfinx import fem, geometry
 from mpi4py import MPI
 
+from .fsi import physics
+from .tags import INLET, OUTLET
+
 
 def von_mises(sigma):
     """sigma_vM = sqrt(3/2 s:s), s = sigma - tr(sigma)/3 I (3x3 Cauchy stress, UFL)."""
@@ -94,3 +97,18 @@ class CellField:
 def assemble_scalar(form, comm) -> float:
     """Assemble a compiled scalar form and sum over ranks."""
     return float(comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM))
+
+
+def flux_volume_forms(pb) -> dict:
+    """UFL forms, on the reference mesh of the problem `pb`, of the urine volume V = int_fluid J dX and the
+    volumetric flow rates through the open ends Q = int (v - w) . J F^-T N dA, w the BDF mesh velocity of
+    the last accepted step: "fluid_volume", "outlet_flux" (positive out), "inlet_flux" (positive in)."""
+    ops = pb.ops
+    v, u = pb.split()["velocity"], pb.split()["displacement"]
+    F = physics.deformation_gradient(ops, u)
+    J = ufl.det(F)
+    n_da = J * ufl.inv(F).T * ops.normal()
+    rel = ops.vec(v) - ops.vec(pb.split(pb.x_dot)["displacement"])
+    return {"outlet_flux": ufl.dot(rel, n_da) * ops.weight * pb.ds(OUTLET),
+            "inlet_flux": -ufl.dot(rel, n_da) * ops.weight * pb.ds(INLET),
+            "fluid_volume": J * ops.weight * pb.dx(tuple(pb.fluid_tags))}

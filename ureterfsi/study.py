@@ -31,7 +31,7 @@ from .fsi import physics
 from .fsi.problem import MonolithicFSI
 from .fields import coupled_parts, field_writer
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
-from .probes import CellField, PointProbe, assemble_scalar, von_mises
+from .probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, von_mises
 from .metadata import cf_meta, write_netcdf
 from .provenance import provenance_attrs
 from .scenes.ureter import pulse_centre, ureter_scene
@@ -90,7 +90,7 @@ class CoupledStent:
         if stent.kinematics != "linear":
             F = physics.deformation_gradient(pb.ops, u)
             sigma = sigma * F.T / ufl.det(F)
-        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb._cells([tags.STENT]))
+        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb.cells([tags.STENT]))
         self.probe = PointProbe(pb.mesh, probe_points)
 
     def update(self, pb: MonolithicFSI) -> None:
@@ -121,13 +121,10 @@ class UreterProbes(Observer):
         e_z = ufl.as_vector([0.0, 0.0, 1.0])
         rel = ops.vec(v) - ops.vec(w)
         ds, dx = pb.ds, pb.dx
-        self.forms = {
-            "outlet_flux": fem.form(ufl.dot(rel, n_da) * ops.weight * ds(tags.OUTLET)),
-            "inlet_flux": fem.form(-ufl.dot(rel, n_da) * ops.weight * ds(tags.INLET)),
+        self.forms = {k: fem.form(f) for k, f in flux_volume_forms(pb).items()} | {
             "outlet_area": fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight * ds(tags.OUTLET)),
             "outlet_axial_velocity_integral": fem.form(ufl.dot(ops.vec(v), e_z) * ufl.sqrt(ufl.dot(n_da, n_da))
                                                        * ops.weight * ds(tags.OUTLET)),
-            "fluid_volume": fem.form(J * ops.weight * dx(tags.FLUID)),
         }
         self.comm = comm
         self.fraction = {"full": 1.0, "half": 2.0, "quarter": 4.0, "axisymmetric": 1.0}[symmetry]
@@ -154,7 +151,7 @@ class UreterProbes(Observer):
             self.hole_form = fem.form(J * ufl.dot(ufl.inv(F) * rel, grad_chi) * ufl.TestFunction(Q) * dx(tags.FLUID))
             self.hole_vec = fem_petsc.create_vector(self.hole_form)
             n_local = mesh.topology.index_map(mesh.topology.dim).size_local
-            fluid = pb._cells([tags.FLUID])
+            fluid = pb.cells([tags.FLUID])
             fluid = fluid[fluid < n_local]
             mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
             Rm = np.hypot(mid[:, 0], mid[:, 1])

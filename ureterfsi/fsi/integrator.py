@@ -32,7 +32,23 @@ log = logging.getLogger("ureterfsi.fsi")
 
 
 class SolveFailure(RuntimeError):
-    """A step could not be completed even with the smallest allowed time step, or the mesh inverted."""
+    """The run cannot go on: a step failed at the smallest allowed time step, or the mesh inverted."""
+
+
+class StepFailure(SolveFailure):
+    """A step failed even after max_halvings halvings; `cause` is the NewtonDivergence of its last attempt."""
+
+    def __init__(self, message, cause: NewtonDivergence):
+        super().__init__(message)
+        self.cause = cause
+
+
+class MeshInversion(SolveFailure):
+    """The minimum ALE Jacobian `min_jacobian` fell to the limit at `time` (the state of the last step)."""
+
+    def __init__(self, message, time: float, min_jacobian: float):
+        super().__init__(message)
+        self.time, self.min_jacobian = time, min_jacobian
 
 
 @dataclass
@@ -49,7 +65,8 @@ class TimeSettings:
     identity: Mapping[str, str] = field(default_factory=dict)
 
 
-_CHECKPOINT_ARRAYS = ("x", "x_n", "x_nm1", "x_nm2", "cells", "meta")
+STATE_ARRAYS = ("x", "x_n", "x_nm1", "x_nm2")    # the arrays of MonolithicFSI.state()
+_CHECKPOINT_ARRAYS = STATE_ARRAYS + ("cells", "meta")
 _CHECKPOINT_META = ("step", "time", "dt_prev", "dt_prev2", "dt_next", "observers", "records", "identity",
                     "identity_hash")
 
@@ -97,11 +114,22 @@ class StepRecord:
 
 
 @dataclass
+class FailedAttempt:
+    """A step attempt Newton could not complete: retried with dt/2 (`halved`), or the last attempt of a
+    step the run gives up on; `time` is the end of the attempt."""
+    step: int
+    time: float
+    dt: float
+    halved: bool
+
+
+@dataclass
 class TimeIntegrator:
     problem: MonolithicFSI
     settings: TimeSettings
     observers: list = field(default_factory=list)
     records: list = field(default_factory=list)
+    failed_attempts: list = field(default_factory=list)
     _pending: Optional[tuple] = field(default=None, init=False, repr=False)   # checked, not yet restored
 
     def _checkpoint_file(self):
@@ -113,14 +141,16 @@ class TimeIntegrator:
         if not self.settings.checkpoint_path:
             return
         pb = self.problem
+        state = pb.state()
         identity = {str(k): str(v) for k, v in self.settings.identity.items()}
-        meta = {"step": step, "time": pb.time, "dt_prev": pb.dt_prev, "dt_prev2": pb.dt_prev2, "dt_next": dt_next,
-                "observers": [o.state() for o in self.observers],
+        meta = {"step": step, "time": state["time"], "dt_prev": state["dt_prev"], "dt_prev2": state["dt_prev2"],
+                "dt_next": dt_next, "observers": [o.state() for o in self.observers],
                 "records": [r.__dict__ for r in self.records],
+                "failed_attempts": [a.__dict__ for a in self.failed_attempts],
                 "identity": identity, "identity_hash": identity_hash(identity)}
         with atomic_path(self._checkpoint_file()) as tmp:
             with open(tmp, "wb") as fh:
-                np.savez(fh, x=pb.x.x.array, x_n=pb.x_n.x.array, x_nm1=pb.x_nm1.x.array, x_nm2=pb._x_nm2,
+                np.savez(fh, **{k: state[k] for k in STATE_ARRAYS},
                          cells=np.asarray(pb.mesh.topology.original_cell_index),
                          meta=np.array(json.dumps(meta)))
         log.info("checkpoint: step %d t=%.6g s -> %s", step, pb.time, self._checkpoint_file())
@@ -154,11 +184,9 @@ class TimeIntegrator:
         if meta["identity_hash"] != identity_hash(wanted) or meta["identity"] != wanted:
             return None, f"written by another run ({identity_differences(meta['identity'], wanted)})"
         n = pb.x.x.array.shape
-        for key in ("x", "x_n", "x_nm1"):
+        for key in STATE_ARRAYS:
             if data[key].shape != n:
                 return None, f"of another problem size ({key} has {data[key].shape[0]} values, this problem {n[0]})"
-        if data["x_nm2"].shape != pb._x_nm2.shape:
-            return None, f"of another problem size (x_nm2 has {data['x_nm2'].shape[0]} values)"
         # The arrays are in process-local numbering. In parallel the graph partitioner need not give
         # the same cells to the same rank in two runs (same sizes, different layout): restoring would
         # scramble the state.
@@ -209,13 +237,11 @@ class TimeIntegrator:
         self._pending = None
         data, meta = state
         pb = self.problem
-        pb.x.x.array[:], pb.x_n.x.array[:], pb.x_nm1.x.array[:] = data["x"], data["x_n"], data["x_nm1"]
-        pb._x_nm2[:] = data["x_nm2"]
-        pb.time, pb.dt_prev, pb.dt_prev2 = meta["time"], meta["dt_prev"], meta["dt_prev2"]
-        pb.t.value = pb.time
+        pb.set_state({k: data[k] for k in STATE_ARRAYS} | {k: meta[k] for k in ("time", "dt_prev", "dt_prev2")})
         for obs, st in zip(self.observers, meta["observers"]):
             obs.load_state(st)
         self.records = [StepRecord(**r) for r in meta["records"]]
+        self.failed_attempts = [FailedAttempt(**a) for a in meta.get("failed_attempts", [])]
         log.info("resumed from checkpoint: step %d t=%.6g s", meta["step"], pb.time)
         return meta["step"], meta["dt_next"]
 
@@ -249,12 +275,14 @@ class TimeIntegrator:
                                 step + 1, pb.time + dt_try, dt_try, err,
                                 ", ".join(f"{r:.2e}" for r in err.history))
                     last = err
+                    self.failed_attempts.append(FailedAttempt(step + 1, pb.time + dt_try, dt_try,
+                                                              attempt < s.max_halvings))
                     dt_try *= 0.5
             else:
-                raise SolveFailure(
+                raise StepFailure(
                     f"step {step + 1} from t={pb.time:.6g} s failed after {s.max_halvings} halvings "
                     f"(last dt={2 * dt_try:.3g} s): {last}; residual history "
-                    f"{', '.join(f'{r:.3e}' for r in last.history)}")
+                    f"{', '.join(f'{r:.3e}' for r in last.history)}", last)
             step += 1
             jmin = pb.min_ale_jacobian()
             wall = _time.perf_counter() - tic
@@ -266,9 +294,10 @@ class TimeIntegrator:
                      "" if krylov is None else f"  krylov={krylov - krylov0:3d}", history[-1],
                      history[0], jmin, wall)
             if jmin <= s.min_ale_jacobian:
-                raise SolveFailure(f"ALE mesh inverted at t={pb.time:.6g} s (step {step}): minimum "
-                                   f"Jacobian {jmin:.3e} <= {s.min_ale_jacobian}; refine the mesh near "
-                                   f"the moving interface, stiffen the mesh motion or reduce the load")
+                raise MeshInversion(f"ALE mesh inverted at t={pb.time:.6g} s (step {step}): minimum "
+                                    f"Jacobian {jmin:.3e} <= {s.min_ale_jacobian}; refine the mesh near "
+                                    f"the moving interface, stiffen the mesh motion or reduce the load",
+                                    pb.time, jmin)
             for obs in self.observers:
                 obs.observe(pb, step)
             dt = dt_try if attempt else min(s.dt, 2.0 * dt)   # after a halving, grow back 2x per step

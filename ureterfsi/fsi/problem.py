@@ -318,7 +318,8 @@ class MonolithicFSI:
         f.name = name
         return f
 
-    def _cells(self, tags):
+    def cells(self, tags) -> np.ndarray:
+        """Sorted local cells (owned and ghost) of the given cell tags."""
         ct = self.scene.cell_tags
         return np.unique(np.concatenate([ct.find(t) for t in tags] or [np.zeros(0, np.int32)])).astype(np.int32)
 
@@ -328,7 +329,7 @@ class MonolithicFSI:
         vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=self.mesh)))
         vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         k = fem.Function(Q, name="mesh_stiffness")
-        cells = self._cells(fluid_tags)
+        cells = self.cells(fluid_tags)
         cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
         dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
         local = vol.array[dofs]
@@ -373,7 +374,7 @@ class MonolithicFSI:
         tdim = self.mesh.topology.dim
         zero = PETSc.ScalarType(0.0)
         self.pin_bcs = []
-        fluid_cells, solid_cells = self._cells(fluid_tags), self._cells(solid_tags)
+        fluid_cells, solid_cells = self.cells(fluid_tags), self.cells(solid_tags)
         if "pressure" in self.index and solid_tags:
             P = self.sub("pressure")
             in_fluid = fem.locate_dofs_topological(P, tdim, fluid_cells)
@@ -381,7 +382,7 @@ class MonolithicFSI:
             pinned = np.setdiff1d(in_solid, in_fluid).astype(np.int32)
             self.pin_bcs.append(fem.dirichletbc(zero, pinned, P))
         if "solid_pressure" in self.index:
-            others = self._cells(tuple(t for t in fluid_tags + solid_tags if t not in mr_tags))
+            others = self.cells(tuple(t for t in fluid_tags + solid_tags if t not in mr_tags))
             Q = self.sub("solid_pressure")
             self.pin_bcs.append(fem.dirichletbc(zero, fem.locate_dofs_topological(Q, tdim, others), Q))
         # mesh-motion rows removed at interface displacement dofs (and at Dirichlet rows)
@@ -432,7 +433,7 @@ class MonolithicFSI:
         A.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, True)
         return A
 
-    def _field_is(self, groups: dict) -> list:
+    def field_is(self, groups: dict) -> list:
         """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
         nloc = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
         offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
@@ -457,7 +458,7 @@ class MonolithicFSI:
         pinned fluid pressures and the Dirichlet rows of the fluid displacement; "mesh" = the other (free) fluid
         mesh displacement; "flow" = the fluid-only velocity and the fluid pressure."""
         tdim = self.mesh.topology.dim
-        solid_cells = self._cells(self.solid_tags)
+        solid_cells = self.cells(self.solid_tags)
         collapsed = {f: np.asarray(self.sub(f).collapse()[1]) for f in self.field_names}
         parts = [fem.locate_dofs_topological(self.sub(f), tdim, solid_cells) for f in ("velocity", "displacement")]
         parts += [collapsed["solid_pressure"]] if "solid_pressure" in collapsed else []
@@ -489,10 +490,10 @@ class MonolithicFSI:
             o[f"{prefix}{key}"] = value
         pc = self.ksp.getPC()
         pc.setType("fieldsplit")
-        pc.setFieldSplitIS(*self._field_is({"mirror": ["displacement"],
+        pc.setFieldSplitIS(*self.field_is({"mirror": ["displacement"],
                                             "flow": [f for f in self.field_names if f != "displacement"]}))
 
-    def _factor_matrix(self):
+    def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
         pc = self.ksp.getPC()
         if pc.getType() == "fieldsplit":
@@ -512,7 +513,7 @@ class MonolithicFSI:
             o[f"{prefix}{key}"] = value
         pc = self.ksp.getPC()
         pc.setType("fieldsplit")
-        pc.setFieldSplitIS(*self._field_is({"momentum": [f for f in self.field_names if f != "pressure"],
+        pc.setFieldSplitIS(*self.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
                                             "pressure": ["pressure"]}))
 
     def _setup_mesh_motion(self, dx_fluid):
@@ -612,7 +613,7 @@ class MonolithicFSI:
             F_axis = ufl.as_tensor([[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])
             J = ufl.conditional(ufl.gt(abs(self.ops.r), 1e-300), J, ufl.det(F_axis))
         self.min_jacobian_expr = fem.Expression(J, Q.element.interpolation_points())
-        cells = self._cells(fluid_tags)
+        cells = self.cells(fluid_tags)
         cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
         self._jac_dofs = np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[cells].ravel())
 
@@ -623,6 +624,21 @@ class MonolithicFSI:
         self._jac_fn.interpolate(self.min_jacobian_expr)
         local = self._jac_fn.x.array[self._jac_dofs].min() if self._jac_dofs.size else np.inf
         return float(self.comm.allreduce(local, MPI.MIN))
+
+    def min_ale_jacobian_at(self):
+        """(minimum ALE Jacobian, reference coordinates (x, y, z) of its fluid vertex), reduced over ranks;
+        a non-finite Jacobian counts as -inf (a scene without fluid: (1, NaN))."""
+        if self.min_jacobian_expr is None:
+            return 1.0, (math.nan,) * 3
+        self._jac_fn.interpolate(self.min_jacobian_expr)
+        vals = self._jac_fn.x.array[self._jac_dofs]
+        local = (math.inf, (math.nan,) * 3)
+        if vals.size:
+            bad = ~np.isfinite(vals)
+            i = int(np.argmax(bad)) if bad.any() else int(np.argmin(vals))
+            xyz = self._jac_fn.function_space.tabulate_dof_coordinates()[self._jac_dofs[i]]
+            local = (-math.inf if bad.any() else float(vals[i]), tuple(float(c) for c in xyz))
+        return min(self.comm.allgather(local), key=lambda item: item[0])
 
     # ---------------------------------------------------------------------------------------
     def _assemble_residual(self):
@@ -689,7 +705,7 @@ class MonolithicFSI:
                 detail = (f" after {self.ksp.getIterationNumber()} Krylov iterations, residual "
                           f"{self.ksp.getResidualNorm():.3e} (-3: iteration limit, -5/-9: breakdown/NaN)")
             elif self.options.linear_solver == "mumps":
-                F = self._factor_matrix()
+                F = self.factor_matrix()
                 detail = (f"; MUMPS INFOG(1) = {F.getMumpsInfog(1)}, INFOG(2) = {F.getMumpsInfog(2)} "
                           f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
             self.invalidate_jacobian()
@@ -796,6 +812,35 @@ class MonolithicFSI:
         elif guess != "constant" and self.dt_prev:
             # x_n + (dt/dt_prev)(x_n - x_n-1): first-order extrapolation, an O(dt^2) guess instead of O(dt)
             self.x.x.array[:] += (dt / self.dt_prev) * (self.x_n.x.array - self.x_nm1.x.array)
+
+    def pose_newton_system(self, dt):
+        """The Newton system (A, b) of a step of dt from the current time at the current iterate, as
+        `newton` assembles it (boundary values at the step's end, segregated mesh motion solved)."""
+        self.set_bdf(dt)
+        self.t.value = self.time + dt
+        self._update_bcs(self.time + dt)
+        if self.segregated:
+            self.solve_mesh_motion()
+        fem_petsc.set_bc(self.x.vector, self.bcs)
+        self.x.x.scatter_forward()
+        self._assemble_residual()
+        self._assemble_jacobian()
+        return self.A, self.b
+
+    def state(self) -> dict:
+        """What a restart needs: copies of the process-local arrays x, x_n, x_nm1 and x_nm2 (the BDF
+        history of the last accepted step) and the times time, dt_prev, dt_prev2."""
+        return {"x": self.x.x.array.copy(), "x_n": self.x_n.x.array.copy(), "x_nm1": self.x_nm1.x.array.copy(),
+                "x_nm2": self._x_nm2.copy(), "time": self.time, "dt_prev": self.dt_prev, "dt_prev2": self.dt_prev2}
+
+    def set_state(self, state: dict) -> None:
+        """Restore a `state()` (arrays of this problem's size): the arrays, the times and the load time t."""
+        for key, array in (("x", self.x.x.array), ("x_n", self.x_n.x.array), ("x_nm1", self.x_nm1.x.array),
+                           ("x_nm2", self._x_nm2)):
+            array[:] = state[key]
+        self.time, self.dt_prev, self.dt_prev2 = state["time"], state["dt_prev"], state["dt_prev2"]
+        self.t.value = self.time
+        self._reaction_ready = False    # the kept residual is not of the restored state
 
     def solve_steady(self, t=None):
         """Steady state (d/dt switched off) at time t: e.g. fluid at rest under the reference pressure,

@@ -321,7 +321,7 @@ class ObstacleForces:
         N = ufl.FacetNormal(mesh)
         Q = fem.FunctionSpace(mesh, ("DG", 0))
         chi = fem.Function(Q)
-        chi.x.array[Q.dofmap.list.array[pb._cells(pb.fluid_tags)]] = 1.0   # DG0: one dof per cell
+        chi.x.array[Q.dofmap.list.array[pb.cells(pb.fluid_tags)]] = 1.0   # DG0: one dof per cell
         traction = lambda s: ufl.det(F(s)) * sigma(s) * ufl.inv(F(s)).T * N(s)   # noqa: E731
         dS = ufl.Measure("dS", domain=mesh, subdomain_data=ft, metadata=pb.dx.metadata())
         self._bforms = []
