@@ -199,3 +199,23 @@ def test_follower_pressure_tube_3d():
           f"{time.perf_counter() - t0:.1f} s")
     assert err < 1e-4
     assert max(its) <= 6
+
+
+# ------------------------------------------------------------------------------------------------
+# the stability matrix's energy budget counts the new loads
+# ------------------------------------------------------------------------------------------------
+def test_stability_load_power_counts_body_forces_and_follower_pressures():
+    """P_load = int_wall b . v dA + int_outer (-p n) . v ds at a uniform velocity v = (c, c) on the undeformed
+    plane channel (wall 4 mm x 1 mm, outer surface 4 mm long, n = (0, 1))."""
+    from ureterfsi.probes import assemble_scalar
+    from ureterfsi.stability.observer import StabilityObserver
+
+    b, p, c = (2.0e3, 3.0e3), 100.0, 0.5
+    sc = V.channel_scene()
+    sc.body_forces.append(BodyForce([2], lambda X, t: ufl.as_vector(b)))
+    sc.pressure_loads.append(FollowerPressure([5], lambda X, t: p))
+    pb = MonolithicFSI(sc)
+    pb.fill("velocity", c)
+    obs = StabilityObserver(pb, {"energy_safety": 10.0, "max_wall_time": 60.0})
+    exact = (b[0] + b[1]) * c * 4e-3 * 1e-3 - p * c * 4e-3
+    assert math.isclose(assemble_scalar(obs.forms["load_power"], pb.comm), exact, rel_tol=1e-12)

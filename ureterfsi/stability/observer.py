@@ -55,8 +55,12 @@ class StabilityObserver(Observer):
             elif isinstance(mat, LinearElastic):
                 el += 0.5 * ufl.inner(physics.elastic_first_piola(ops, mat, u), ops.grad(u)) * w * dxs
         X_ref = ufl.SpatialCoordinate(pb.mesh)
+        # the power of every external load on the solid: tractions, follower pressures, body forces
         p_load = sum((ufl.dot(load.traction(X_ref, pb.t, ops.normal()), V) * w * ds(tuple(load.tags))
                       for load in sc.loads), 0)
+        p_load += sum((ufl.dot(physics.follower_pressure_traction(ops, load.pressure(X_ref, pb.t), u), V) * w
+                       * ds(tuple(load.tags)) for load in sc.pressure_loads), 0)
+        p_load += sum((ufl.dot(load.force(X_ref, pb.t), V) * w * dx(tuple(load.tags)) for load in sc.body_forces), 0)
         p_open = sum((-ob.normal_stress * ufl.dot(n_da, V) * w * ds(tuple(ob.tags)) for ob in sc.open_boundaries), 0)
         forms.update(kinetic_energy_solid=ke_s, elastic_energy=el, load_power=p_load, open_boundary_power=p_open)
         self.forms = {k: fem.form(f) for k, f in forms.items() if not isinstance(f, (int, float))}
