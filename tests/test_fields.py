@@ -32,7 +32,7 @@ def run(tmp_path_factory):
     subprocess.run([sys.executable, "-m", "ureterfsi.study", "--config-json", str(tmp / "cfg.json"), "--model", "3",
                     "--level", "coarse", "--symmetry", "quarter", "--mesh", str(tmp / "m3.msh"), "--out", str(out),
                     "--fidelity", "one_way"], check=True, cwd=REPO, capture_output=True)
-    with xr.open_dataset(out) as ds:
+    with xr.open_dataset(out, decode_times=False) as ds:
         ds.load()
     return ds, out, cfg
 

@@ -144,7 +144,7 @@ def test_run_datasets(e2e):
 
     cfg = e2e.cfg
     for m in e2e.models:
-        with xr.open_dataset(e2e.run_file(m)) as ds:
+        with xr.open_dataset(e2e.run_file(m), decode_times=False) as ds:
             ds.load()
         stented = cfg["models"][m]["stent"]
         assert ds.attrs["model"] == m and ds.attrs["mesh_level"] == e2e.level and ds.attrs["symmetry"] == e2e.symmetry[m]
@@ -172,11 +172,11 @@ def test_run_datasets(e2e):
 
 
 def test_study_datasets(e2e):
-    with xr.open_dataset(e2e.dir / f"results/datasets/models_{e2e.level}.nc") as ds:
+    with xr.open_dataset(e2e.dir / f"results/datasets/models_{e2e.level}.nc", decode_times=False) as ds:
         assert "model" in ds.dims and list(ds["model"].values.astype(str)) == e2e.models
         assert list(ds["model_label"].values.astype(str)) == [e2e.cfg["models"][m]["label"] for m in e2e.models]
         assert ds["outlet_flux"].dims[0] == "model" and "time" in ds["outlet_flux"].dims
-    with xr.open_dataset(e2e.dir / "results/datasets/mesh_convergence.nc") as ds:
+    with xr.open_dataset(e2e.dir / "results/datasets/mesh_convergence.nc", decode_times=False) as ds:
         assert "level" in ds.dims and list(ds["level"].values.astype(str)) == [e2e.level]
         assert "stent_von_mises_line" in ds and "level" in ds["stent_von_mises_line"].dims
 
@@ -288,7 +288,7 @@ def _solve_again(e2e, model, *args, **popen):
 def test_killed_solve_resumes_from_checkpoint(e2e):
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    reference = xr.load_dataset(e2e.reference)     # the uninterrupted run of the module fixture
+    reference = xr.load_dataset(e2e.reference, decode_times=False)     # the uninterrupted run of the module fixture
     ckpt_dir = (e2e.dir / f"results/checkpoints/{e2e.stem[m]}").parent
     proc = _solve_again(e2e, m, start_new_session=True)
     t0 = time.perf_counter()
@@ -312,7 +312,7 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
     log = log_path.read_text()
     assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
     assert "initial state" not in log          # no fresh start
-    resumed = xr.load_dataset(run_file)
+    resumed = xr.load_dataset(run_file, decode_times=False)
     # The integrator drops the cached factorisation at every checkpoint, so the resumed run repeats the
     # uninterrupted run's arithmetic: identical results (wall times aside).
     for name, var in reference.data_vars.items():
@@ -328,11 +328,11 @@ def test_solve_rule_under_mpi_matches_serial(e2e):
     assert shutil.which("mpiexec"), "mpiexec missing: workflow/setup.sh installs mpi-default-bin"
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    serial = xr.load_dataset(e2e.reference)
+    serial = xr.load_dataset(e2e.reference, decode_times=False)
     # --set-resources, not --default-resources: the solve rule sets resources.mpi itself, and a rule's own
     # resources take precedence over the defaults
     ok(_solve_again(e2e, m, "--set-resources", "solve:tasks=2", f"solve:mpi='{MPI_LAUNCHER}'"))
-    par = xr.load_dataset(run_file)
+    par = xr.load_dataset(run_file, decode_times=False)
     assert par.attrs["processes"] == 2 and serial.attrs["processes"] == 1
     for name in ("outlet_flux", "stent_max_von_mises", "inlet_flux", "max_wall_displacement"):
         a, b = par[name].values[1:], serial[name].values[1:]
@@ -347,7 +347,7 @@ def test_ladder_target(e2e):
     out = ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "ladder"))
     counts = job_counts(out)
     assert counts.get("ladder_run") == 2 and counts.get("ladder") == 1, counts
-    with xr.open_dataset(e2e.dir / "results/datasets/ladder.nc") as ds:
+    with xr.open_dataset(e2e.dir / "results/datasets/ladder.nc", decode_times=False) as ds:
         ds.load()
     assert list(ds["rung"].values) == ["fully_coupled", "one_way"]
     err = ds["error"].sel(rung="one_way")
@@ -356,7 +356,7 @@ def test_ladder_target(e2e):
     # the one-way rung follows the fully coupled model closely (< 2 % on every figure quantity)
     assert 0.0 < float(err.max()) < 0.02, err.values
     assert set(ds["chosen_rung"].values) == {"one_way"}
-    with xr.open_dataset(e2e.dir / "results/ladder/one_way.nc") as run:
+    with xr.open_dataset(e2e.dir / "results/ladder/one_way.nc", decode_times=False) as run:
         assert run.attrs["fidelity"] == "one_way"
         assert run.attrs["one_way_max_wall_pressure_deviation"] < 1e-2 * run.attrs["one_way_peristaltic_peak_traction"]
         assert run.attrs["one_way_max_stent_displacement"] < 1e-2 * run.attrs["one_way_hole_diameter"]
