@@ -45,8 +45,8 @@ MPI_LAUNCHER = "mpiexec --allow-run-as-root --oversubscribe"
 
 FIGURES = ["fig02_domain", "fig03_mesh_convergence", "fig04_outlet_flow", "fig05_wall_displacement",
            "fig06_hole_velocity", "fig07_hole_velocity", "fig08_hole_velocity", "fig09_hole_velocity",
-           "fig10_stent_von_mises", "fig11_hole_flux"]
-FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all"}
+           "fig10_stent_von_mises", "fig11_hole_flux", "field_hole_flow", "field_pressure"]
+FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all_field_figures", "all"}
 HEAVY_RULES = ("mesh", "solve")
 SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement",
           "pulse_centre")
@@ -169,6 +169,31 @@ def test_run_datasets(e2e):
             assert var.attrs.get("units") == CF[name][0], (name, var.attrs)
             assert var.attrs.get("long_name"), name
         assert np.abs(ds["outlet_flux"]).max() > 0 and ds["max_wall_displacement"].values[-1] > 0
+
+
+def test_field_file_of_the_coupled_run(e2e):
+    """The fully coupled run's field file (part `domain`, the whole mesh): the pressure is finite on every
+    urine vertex, the interface included, and the velocity the hole-flow figure samples on the run's probe
+    line across the outlet-most hole agrees with the run's hole_velocity_y to the P1 output's interpolation
+    error (< 10 % of the peak)."""
+    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.plotting_fields import hole_flow_section, urine_cells, urine_fields
+
+    m = e2e.stented[0]
+    with xr.open_dataset(e2e.run_file(m), decode_times=False) as ds:
+        ds.load()
+    fs = urine_fields(e2e.run_file(m).parent / ds.attrs["fields_path"])
+    assert fs.directory.name == f"model{m}_{e2e.level}" and (fs.directory / "domain.xdmf").exists()
+    urine = np.unique(fs.cells[urine_cells(fs)])
+    for t in fs.times:
+        assert np.isfinite(fs.values("pressure", t)[urine]).all()
+    g = UreterGeometry.from_config(e2e.cfg)
+    zh, s = float(ds["hole_z"].max()), ds["hole_offset"].values
+    sec = hole_flow_section(fs, [float(t) for t in ds["probe_time"].values], zh, g, y=[g.probe_radius], z=zh + s)
+    field, probe = np.array([v[0, :, 1] for v in sec.values]), ds["hole_velocity_y"].values
+    both = np.isfinite(field) & np.isfinite(probe)
+    assert both.sum() >= 0.8 * probe.size
+    assert np.abs(field - probe)[both].max() < 0.1 * np.abs(probe[both]).max()
 
 
 def test_study_datasets(e2e):
