@@ -2,6 +2,7 @@
 #   snakemake --cores 2                 full reproduction (every figure of the paper)
 #   snakemake --cores 2 all_meshes      every mesh of the configuration
 #   snakemake --cores 2 all_figures     the figures (runs whatever is missing)
+#   snakemake --cores 2 all_field_figures   the figures drawn from the field files
 #   snakemake --report report.html      HTML report with every figure and its caption
 # Configuration: config/config.yaml, validated against workflow/schemas/config.schema.yaml
 # and by ureterfsi.config (geometric consistency) before any rule runs.
@@ -34,6 +35,7 @@ include: "workflow/rules/mesh.smk"
 include: "workflow/rules/solve.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/fields.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/ladder.smk"
 include: "workflow/rules/stability.smk"
@@ -43,5 +45,6 @@ include: "workflow/rules/designs.smk"
 rule all:
     input:
         rules.all_figures.input,
+        rules.all_field_figures.input,
         rules.calibration.output,
     default_target: True

@@ -36,7 +36,7 @@ def solve(cfg, model, level, end, predictor, out):
                     "--mesh", str(ROOT / f"results/meshes/quarter/model{model}_{level}.msh"), "--out", str(out)],
                    check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     Path(fh.name).unlink()
-    return xr.open_dataset(out)
+    return xr.open_dataset(out, decode_times=False)
 
 
 def main():

@@ -164,7 +164,7 @@ def test_combine_models(runs, cfg, tmp_path):
                                            for k in ("quantities", "tolerance", "measured_error")}
     out = tmp_path / "models_coarse.nc"
     aggregate.write_dataset(ds, out)
-    back = xr.open_dataset(out)
+    back = xr.open_dataset(out, decode_times=False)
     assert back["model_label"].values.tolist() == ["No stent", "5 mm", "10 mm", "25 mm"]
     back.close()
 

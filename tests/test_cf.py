@@ -50,19 +50,51 @@ def test_encoding_follows_cf(tmp_path):
         metadata.annotate(xr.Dataset({"unknown": ("n", [1.0])}))
 
 
-OPEN = {"gci": "value/extrapolated_value carry units 'see quantity_units' (not a UDUNITS unit)",
-        **{k: "the time axis needs units '<unit> since <epoch>' for compliance-checker (readers decode_times)"
-           for k in ("run", "models", "wall_motion")}}
+def stability_case(name: str, axis: str, steps: int) -> xr.Dataset:
+    """A synthetic stability case file with the layout of ureterfsi.stability.run_case (every CF name: the
+    per-case scalars, the per-step series along `step` with `time`)."""
+    from ureterfsi import stability as S
+
+    per_step = {"time", *S.PER_STEP}
+    strings = {"axis": axis, "value_label": "0.1", "outcome": "stable", "limit": "", "diagnosis": "",
+               "mesh_level": "coarse", "scene": "rz"}
+    scalars = {k: ((), strings.get(k, 1.0)) for k in S.CF if k not in per_step | {"case", "step", "halving_time"}}
+    series = {k: ("step", np.linspace(0.0, 1.0, steps)) for k in per_step - {"time"}}
+    ds = xr.Dataset(scalars | series, coords={"step": np.arange(steps), "time": ("step", np.linspace(0, 0.1, steps))})
+    ds = ds.assign_coords(case=name)
+    for v in ds.variables:
+        ds[v].attrs.update(units=S.CF[v][0], long_name=S.CF[v][1])
+    ds.attrs.update(case=name, title=f"synthetic stability case {name}")
+    return ds
 
 
-@pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=OPEN[k]))
-                                  if k in OPEN else k for k in ("run", "models", "ladder", "mesh_convergence", "gci",
-                                                                    "wall_motion")])
+def design_study(cfg, tmp_path) -> xr.Dataset:
+    """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3."""
+    from test_aggregate_figures import synthetic_run
+    from ureterfsi import designs
+    from ureterfsi.config import load_config
+
+    grid = {"model": "3", "level": "coarse",
+            "grid": {"mode": "full_factorial", "parameters": {"hole_diameter": [5e-4, 7e-4],
+                                                               "hole_pair_spacing": [0.005, 0.01]}}}
+    cfg = load_config(cfg, {"design_studies": {"s": grid}})
+    paths = {}
+    for p in designs.studies(cfg)["s"].points:
+        paths[p.id] = tmp_path / f"{p.id}.nc"
+        metadata.write_netcdf(synthetic_run(cfg, "3", end=cfg["time"]["end"]), paths[p.id])
+    return designs.study_dataset(cfg, "s", paths)
+
+
+KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",
+         "design_study")
+
+
+@pytest.mark.parametrize("kind", KINDS)
 def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
+    """Every dataset kind the pipeline writes as netCDF (the wall calibration is a JSON file) has 0 errors."""
     from ureterfsi.config import load_config
 
     cfg = load_config(repo_root / "config/config.yaml")
-    conv = convergence_dataset()[0]
     if kind in ("run", "models", "ladder"):
         from test_aggregate_figures import synthetic_run
         from ureterfsi import aggregate, ladder
@@ -82,23 +114,47 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
                                       for r in ("fully_coupled", "one_way")}
             ds = ladder.ladder_dataset({"fully_coupled": paths["3"], "one_way": paths["3"]}, cfg)
     elif kind == "mesh_convergence":
-        ds = conv
+        ds = convergence_dataset()[0]
     elif kind == "gci":
-        ds = gci_dataset(conv)
-    else:
-        from ureterfsi.config import load_config_files
-        from ureterfsi.config import DEFAULT_CONFIG
+        ds = gci_dataset(convergence_dataset()[0])
+    elif kind == "wall_motion":
         from ureterfsi.oneway import WallHistory
 
         t, zi, zo = np.linspace(0, 0.1, 5), np.linspace(0, 0.05, 7), np.linspace(0, 0.05, 9)
         w = WallHistory(t, zi, *(np.random.default_rng(k).normal(size=(5, 7)) * 1e-4 for k in range(4)),
                         zo, np.zeros((5, 9)))
-        ds = w.to_dataset(load_config_files([str(DEFAULT_CONFIG)]))
+        ds = w.to_dataset(cfg)
+    elif kind == "stability_case":
+        ds = stability_case("baseline", "none", 4)
+    elif kind == "stability":
+        from ureterfsi import stability as S
+
+        ds = S.combine([stability_case("baseline", "none", 4), stability_case("time_step_0.1", "time_step", 3)])
+    else:
+        ds = design_study(cfg, tmp_path)
     path = tmp_path / f"{kind}.nc"
     metadata.write_netcdf(ds, path)
     errors, warnings = cf_errors(path)
     print(f"{kind}: {errors} errors, {warnings} warnings")
-    assert errors == 0
+    assert errors == 0, json.loads(Path(str(path) + ".cc.json").read_text())["cf:1.8"]["high_priorities"]
+
+
+def test_time_coordinate_is_cf_and_read_in_seconds(tmp_path):
+    """`time` is written as a CF time coordinate (units '<unit> since <epoch>', calendar) and read back by the
+    package's reader as seconds from the run's start, not as dates."""
+    from test_aggregate_figures import synthetic_run
+    from ureterfsi.checked_io import RUN_FILE, open_netcdf
+    from ureterfsi.config import load_config
+
+    cfg = load_config(Path(__file__).resolve().parent.parent / "config/config.yaml")
+    run = synthetic_run(cfg, "3", end=0.1)
+    path = tmp_path / "run.nc"
+    metadata.write_netcdf(run, path)
+    with netCDF4.Dataset(path) as nc:
+        assert nc["time"].units == "s since 2000-01-01 00:00:00" and nc["time"].calendar == metadata.CALENDAR
+    back = open_netcdf(path, RUN_FILE)
+    assert back["time"].dtype.kind == "f"
+    np.testing.assert_allclose(back["time"].values, run["time"].values, rtol=0, atol=0)
 
 
 def test_postprocessing_imports_without_dolfinx():

@@ -21,7 +21,7 @@ from ureterfsi import aggregate, metadata
 from ureterfsi.checked_io import open_netcdf
 from ureterfsi.provenance import FORMAT_VERSION
 from ureterfsi.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size,
-                           three_grid_gci,
+                           three_grid_gci, extrapolated_values, quantity_values,
                            write_gci_table)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -187,21 +187,23 @@ def _check_cf(ds):
 def test_gci_dataset_recovers_power_laws(tmp_path):
     conv, f, z = convergence_dataset()
     ds = gci_dataset(conv)
-    names = ["peak_outlet_flux", "peak_stent_max_von_mises", "stent_von_mises_z12.5mm", "stent_von_mises_z25mm",
-             "stent_von_mises_z37.5mm"]
+    names = ["peak_outlet_flux", "peak_stent_max_von_mises", "stent_von_mises_z12_5mm", "stent_von_mises_z25mm",
+             "stent_von_mises_z37_5mm"]
     assert list(ds["quantity"].values) == names
-    assert ds["value"].dims == ("quantity", "level") and list(ds["level"].values) == ["coarse", "medium", "fine"]
+    assert all(quantity_values(ds, q).dims == ("level",) for q in names)
+    assert list(ds["level"].values) == ["coarse", "medium", "fine"]
     assert ds.attrs["fine_level"] == "fine" and ds.attrs["coarse_level"] == "coarse"
     np.testing.assert_allclose(ds["r21"], (320000 / 140000) ** (1 / 3), rtol=1e-12)
     np.testing.assert_allclose(ds["r32"], (140000 / 60000) ** (1 / 3), rtol=1e-12)
     np.testing.assert_allclose(ds["h"], ds["cells"] ** (-1 / 3), rtol=1e-12)
     np.testing.assert_allclose(ds["apparent_order"], [P_FLUX, P_VM, P_LINE, P_LINE, P_LINE], rtol=1e-8)
     fz = np.interp(DEFAULT_POINTS_Z, z, f)
-    np.testing.assert_allclose(ds["extrapolated_value"], [1e-8, 6e3, *fz], rtol=1e-10)
+    np.testing.assert_allclose(extrapolated_values(ds), [1e-8, 6e3, *fz], rtol=1e-10)
     np.testing.assert_allclose(ds["probe_z"][2:], DEFAULT_POINTS_Z)
     assert np.isnan(ds["probe_z"][:2]).all()
     assert list(ds["diagnosis"].values) == ["monotone"] * 5
-    assert list(ds["quantity_units"].values) == ["m3 s-1", "Pa", "Pa", "Pa", "Pa"]
+    assert [quantity_values(ds, q).attrs["units"] for q in names] == ["m3 s-1", "Pa", "Pa", "Pa", "Pa"]
+    assert [ds[f"extrapolated_value_{q}"].attrs["units"] for q in names] == ["m3 s-1", "Pa", "Pa", "Pa", "Pa"]
     assert (ds["gci_fine21"] > 0).all() and (ds["gci32"] > ds["gci_fine21"]).all()
     _check_cf(ds)
     # provenance: the input's attrs are kept, its own provenance under input_*
@@ -268,7 +270,7 @@ def test_gci_dataset_from_combine_levels(cfg, tmp_path):
     np.testing.assert_allclose(ds["apparent_order"][4:], 2.0, rtol=1e-6)
     line_z = conv["z"].values      # the synthetic line at t = 1.5 s is VM_BASE (1 + 0.3 exp(...)) x factor
     exact = np.interp(DEFAULT_POINTS_Z, line_z, VM_BASE * (1 + 0.3 * np.exp(-0.5 * ((line_z - 0.03) / 5e-3) ** 2)))
-    np.testing.assert_allclose(ds["extrapolated_value"][4:], exact, rtol=1e-8)
+    np.testing.assert_allclose(extrapolated_values(ds)[4:], exact, rtol=1e-8)
     assert ds.attrs["model"] == "3" and "run_fine_cells" in ds.attrs
 
 

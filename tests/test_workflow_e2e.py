@@ -45,8 +45,8 @@ MPI_LAUNCHER = "mpiexec --allow-run-as-root --oversubscribe"
 
 FIGURES = ["fig02_domain", "fig03_mesh_convergence", "fig04_outlet_flow", "fig05_wall_displacement",
            "fig06_hole_velocity", "fig07_hole_velocity", "fig08_hole_velocity", "fig09_hole_velocity",
-           "fig10_stent_von_mises", "fig11_hole_flux"]
-FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all"}
+           "fig10_stent_von_mises", "fig11_hole_flux", "field_hole_flow", "field_pressure"]
+FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all_field_figures", "all"}
 HEAVY_RULES = ("mesh", "solve")
 SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement",
           "pulse_centre")
@@ -144,7 +144,7 @@ def test_run_datasets(e2e):
 
     cfg = e2e.cfg
     for m in e2e.models:
-        with xr.open_dataset(e2e.run_file(m)) as ds:
+        with xr.open_dataset(e2e.run_file(m), decode_times=False) as ds:
             ds.load()
         stented = cfg["models"][m]["stent"]
         assert ds.attrs["model"] == m and ds.attrs["mesh_level"] == e2e.level and ds.attrs["symmetry"] == e2e.symmetry[m]
@@ -171,12 +171,37 @@ def test_run_datasets(e2e):
         assert np.abs(ds["outlet_flux"]).max() > 0 and ds["max_wall_displacement"].values[-1] > 0
 
 
+def test_field_file_of_the_coupled_run(e2e):
+    """The fully coupled run's field file (part `domain`, the whole mesh): the pressure is finite on every
+    urine vertex, the interface included, and the velocity the hole-flow figure samples on the run's probe
+    line across the outlet-most hole agrees with the run's hole_velocity_y to the P1 output's interpolation
+    error (< 10 % of the peak)."""
+    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.plotting_fields import hole_flow_section, urine_cells, urine_fields
+
+    m = e2e.stented[0]
+    with xr.open_dataset(e2e.run_file(m), decode_times=False) as ds:
+        ds.load()
+    fs = urine_fields(e2e.run_file(m).parent / ds.attrs["fields_path"])
+    assert fs.directory.name == f"model{m}_{e2e.level}" and (fs.directory / "domain.xdmf").exists()
+    urine = np.unique(fs.cells[urine_cells(fs)])
+    for t in fs.times:
+        assert np.isfinite(fs.values("pressure", t)[urine]).all()
+    g = UreterGeometry.from_config(e2e.cfg)
+    zh, s = float(ds["hole_z"].max()), ds["hole_offset"].values
+    sec = hole_flow_section(fs, [float(t) for t in ds["probe_time"].values], zh, g, y=[g.probe_radius], z=zh + s)
+    field, probe = np.array([v[0, :, 1] for v in sec.values]), ds["hole_velocity_y"].values
+    both = np.isfinite(field) & np.isfinite(probe)
+    assert both.sum() >= 0.8 * probe.size
+    assert np.abs(field - probe)[both].max() < 0.1 * np.abs(probe[both]).max()
+
+
 def test_study_datasets(e2e):
-    with xr.open_dataset(e2e.dir / f"results/datasets/models_{e2e.level}.nc") as ds:
+    with xr.open_dataset(e2e.dir / f"results/datasets/models_{e2e.level}.nc", decode_times=False) as ds:
         assert "model" in ds.dims and list(ds["model"].values.astype(str)) == e2e.models
         assert list(ds["model_label"].values.astype(str)) == [e2e.cfg["models"][m]["label"] for m in e2e.models]
         assert ds["outlet_flux"].dims[0] == "model" and "time" in ds["outlet_flux"].dims
-    with xr.open_dataset(e2e.dir / "results/datasets/mesh_convergence.nc") as ds:
+    with xr.open_dataset(e2e.dir / "results/datasets/mesh_convergence.nc", decode_times=False) as ds:
         assert "level" in ds.dims and list(ds["level"].values.astype(str)) == [e2e.level]
         assert "stent_von_mises_line" in ds and "level" in ds["stent_von_mises_line"].dims
 
@@ -288,7 +313,7 @@ def _solve_again(e2e, model, *args, **popen):
 def test_killed_solve_resumes_from_checkpoint(e2e):
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    reference = xr.load_dataset(e2e.reference)     # the uninterrupted run of the module fixture
+    reference = xr.load_dataset(e2e.reference, decode_times=False)     # the uninterrupted run of the module fixture
     ckpt_dir = (e2e.dir / f"results/checkpoints/{e2e.stem[m]}").parent
     proc = _solve_again(e2e, m, start_new_session=True)
     t0 = time.perf_counter()
@@ -312,7 +337,7 @@ def test_killed_solve_resumes_from_checkpoint(e2e):
     log = log_path.read_text()
     assert "resumed from checkpoint: step 1" in log and "done in" in log, log[-2000:]
     assert "initial state" not in log          # no fresh start
-    resumed = xr.load_dataset(run_file)
+    resumed = xr.load_dataset(run_file, decode_times=False)
     # The integrator drops the cached factorisation at every checkpoint, so the resumed run repeats the
     # uninterrupted run's arithmetic: identical results (wall times aside).
     for name, var in reference.data_vars.items():
@@ -328,11 +353,11 @@ def test_solve_rule_under_mpi_matches_serial(e2e):
     assert shutil.which("mpiexec"), "mpiexec missing: workflow/setup.sh installs mpi-default-bin"
     m = e2e.stented[0]
     run_file = e2e.run_file(m)
-    serial = xr.load_dataset(e2e.reference)
+    serial = xr.load_dataset(e2e.reference, decode_times=False)
     # --set-resources, not --default-resources: the solve rule sets resources.mpi itself, and a rule's own
     # resources take precedence over the defaults
     ok(_solve_again(e2e, m, "--set-resources", "solve:tasks=2", f"solve:mpi='{MPI_LAUNCHER}'"))
-    par = xr.load_dataset(run_file)
+    par = xr.load_dataset(run_file, decode_times=False)
     assert par.attrs["processes"] == 2 and serial.attrs["processes"] == 1
     for name in ("outlet_flux", "stent_max_von_mises", "inlet_flux", "max_wall_displacement"):
         a, b = par[name].values[1:], serial[name].values[1:]
@@ -347,7 +372,7 @@ def test_ladder_target(e2e):
     out = ok(snakemake(e2e.dir, e2e.cfg_path, "--cores", "2", "ladder"))
     counts = job_counts(out)
     assert counts.get("ladder_run") == 2 and counts.get("ladder") == 1, counts
-    with xr.open_dataset(e2e.dir / "results/datasets/ladder.nc") as ds:
+    with xr.open_dataset(e2e.dir / "results/datasets/ladder.nc", decode_times=False) as ds:
         ds.load()
     assert list(ds["rung"].values) == ["fully_coupled", "one_way"]
     err = ds["error"].sel(rung="one_way")
@@ -356,7 +381,7 @@ def test_ladder_target(e2e):
     # the one-way rung follows the fully coupled model closely (< 2 % on every figure quantity)
     assert 0.0 < float(err.max()) < 0.02, err.values
     assert set(ds["chosen_rung"].values) == {"one_way"}
-    with xr.open_dataset(e2e.dir / "results/ladder/one_way.nc") as run:
+    with xr.open_dataset(e2e.dir / "results/ladder/one_way.nc", decode_times=False) as run:
         assert run.attrs["fidelity"] == "one_way"
         assert run.attrs["one_way_max_wall_pressure_deviation"] < 1e-2 * run.attrs["one_way_peristaltic_peak_traction"]
         assert run.attrs["one_way_max_stent_displacement"] < 1e-2 * run.attrs["one_way_hole_diameter"]

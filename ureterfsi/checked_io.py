@@ -68,7 +68,8 @@ def _check_version(path, version, kind: str, written_by=None) -> None:
 
 
 def open_netcdf(path, contract: Contract) -> xr.Dataset:
-    """The dataset at `path`, loaded into memory (the file is closed), checked against `contract`."""
+    """The dataset at `path`, loaded into memory (the file is closed), checked against `contract`. Times are
+    not decoded: `time` (units "s since <epoch>", ureterfsi.metadata) stays in seconds from the run's start."""
     path = Path(path)
     _check_exists(path, contract.kind)
     with open(path, "rb") as fh:
@@ -76,7 +77,7 @@ def open_netcdf(path, contract: Contract) -> xr.Dataset:
     if not head.startswith(_NETCDF_MAGIC):
         raise BadFile(path, f"not a netCDF file (starts with {head[:8]!r}), expected a {contract.kind}")
     try:
-        with xr.open_dataset(path) as ds:
+        with xr.open_dataset(path, decode_times=False) as ds:
             ds = ds.load()
     except Exception as err:  # netCDF4/HDF5 report truncation as OSError, RuntimeError or KeyError
         raise BadFile(path, f"truncated or corrupt netCDF ({type(err).__name__}: {err})") from None

@@ -406,7 +406,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     st = studies(cfg)[name]
     runs = {}
     for p in st.points:
-        with xr.open_dataset(paths[p.id]) as ds:
+        with xr.open_dataset(paths[p.id], decode_times=False) as ds:
             runs[p.id] = ds.load()
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)

@@ -2,7 +2,9 @@
 
 What is written (config `fields`), on the reference (ALE) mesh of each part:
   velocity      m s-1  urine velocity; the solid velocity in the wall and stent
-  pressure      Pa     urine pressure (NaN off the urine)
+  pressure      Pa     urine pressure; the reference pressure p_ref at the vertices of no urine cell (select the
+                       urine by `subdomain` = 1: NaN there would reach the interface vertices too, as the XDMF
+                       writer takes each vertex value by evaluating the P1 field in every adjacent cell)
   displacement  m      solid displacement in the wall and stent, ALE mesh displacement in the urine:
                        ParaView's "Warp By Vector" with it gives the current configuration x = X + u
   von_mises     Pa     stent von Mises stress per cell (DG0: cell mean of the probes' DG1 field), NaN off the stent
@@ -59,21 +61,22 @@ def fields_dir(out_path: str | os.PathLike) -> Path:
 class _Nodal:
     """P1 (vertex-value) output of a field of a mixed state, or of a function."""
 
-    def __init__(self, name, source, mesh, shape, nan_outside=None):
+    def __init__(self, name, source, mesh, shape, outside=None):
         space = (fem.VectorFunctionSpace(mesh, ("Lagrange", 1)) if shape else fem.FunctionSpace(mesh, ("Lagrange", 1)))
         self.out = fem.Function(space, name=name)
         self.source = source
-        self.nan = None
-        if nan_outside is not None:      # cells where the field lives; NaN at the vertices of no such cell
+        self.fill, self.fill_value = None, None
+        if outside is not None:      # (cells where the field lives, value at the vertices of no such cell)
+            cells, self.fill_value = outside
             dofs = space.dofmap.list.array.reshape(-1, space.dofmap.dof_layout.num_dofs)
             keep = np.zeros(self.out.x.array.size, dtype=bool)
-            keep[dofs[np.asarray(nan_outside, np.int32)].ravel()] = True
-            self.nan = ~keep
+            keep[dofs[np.asarray(cells, np.int32)].ravel()] = True
+            self.fill = ~keep
 
     def __call__(self):
         self.out.interpolate(self.source())
-        if self.nan is not None:
-            self.out.x.array[self.nan] = np.nan
+        if self.fill is not None:
+            self.out.x.array[self.fill] = self.fill_value
         return self.out
 
 
@@ -110,14 +113,16 @@ def _static_tags(mesh, cell_tags):
     return f
 
 
-def coupled_parts(pb, stent, quantities) -> list[Part]:
-    """Part `domain` of a fully coupled run (ureterfsi.study): the whole mesh; `stent` a CoupledStent or None."""
+def coupled_parts(pb, stent, quantities, reference_pressure: float) -> list[Part]:
+    """Part `domain` of a fully coupled run (ureterfsi.study): the whole mesh; `stent` a CoupledStent or None;
+    the pressure is reference_pressure (Pa) off the urine (its dofs there are pinned to 0 by the solver)."""
     mesh, ct = pb.mesh, pb.scene.cell_tags
     gdim = mesh.geometry.dim
     fluid = np.unique(np.concatenate([ct.find(t) for t in pb.scene.fluid.tags]))
     makers = {
         "velocity": lambda: _Nodal("velocity", lambda: pb.field("velocity"), mesh, (gdim,)),
-        "pressure": lambda: _Nodal("pressure", lambda: pb.field("pressure"), mesh, (), nan_outside=fluid),
+        "pressure": lambda: _Nodal("pressure", lambda: pb.field("pressure"), mesh, (),
+                                   outside=(fluid, reference_pressure)),
         "displacement": lambda: _Nodal("displacement", lambda: pb.field("displacement"), mesh, (gdim,)),
         "von_mises": lambda: _CellMean("von_mises", stent.von_mises, mesh, ct.find(tags.STENT)),
     }

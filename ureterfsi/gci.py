@@ -72,8 +72,8 @@ from .provenance import atomic_path, provenance_attrs
 
 # what the readers of a GCI dataset (table_gci) rely on
 GCI_DATASET = Contract("GCI dataset", attrs=("fine_level", "medium_level", "coarse_level", "safety_factor"),
-                       variables=("quantity", "level", "value", "cells", "h", "r21", "r32", "apparent_order",
-                                  "extrapolated_value", "gci_fine21", "diagnosis", "probe_z"))
+                       variables=("quantity", "level", "cells", "h", "r21", "r32", "apparent_order", "gci_fine21",
+                                  "diagnosis", "probe_z"))
 SIDECAR = Contract("mesh sidecar", attrs=("measure", "subdomain_measure"))   # what mesh_measure reads
 SAFETY_FACTOR = 1.25                      # Celik et al. 2008 (and Roache) for three or more grids
 DEFAULT_POINTS_Z = (0.0125, 0.025, 0.0375)   # m: probe-line points of the GCI (quarter, half, three quarters of L)
@@ -247,7 +247,22 @@ def mesh_measure(sidecar) -> tuple[float, int]:
 
 
 def _quantity_name(z: float) -> str:
-    return f"stent_von_mises_z{z * 1e3:g}mm"
+    """Quantity of a probe-line point: letters, digits and underscores only (CF §2.3), e.g. ..._z12_5mm."""
+    return f"stent_von_mises_z{z * 1e3:g}mm".replace(".", "_")
+
+
+def quantity_values(ds: xr.Dataset, quantity: str) -> xr.DataArray:
+    """Values (level) of one quantity of a GCI dataset, in its own units: variable value_<quantity>."""
+    name = f"value_{quantity}"
+    if name not in ds:
+        raise KeyError(f"GCI dataset: no variable {name!r} for quantity {quantity!r}")
+    return ds[name]
+
+
+def extrapolated_values(ds: xr.Dataset) -> np.ndarray:
+    """phi_ext21 of every quantity of a GCI dataset (variables extrapolated_value_<quantity>), in the order of
+    the quantity axis, each in its quantity's units."""
+    return np.array([float(ds[f"extrapolated_value_{q}"]) for q in ds["quantity"].values])
 
 
 def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCALARS, measure: float | None = None,
@@ -262,10 +277,11 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
     a sidecar), h is in m.
 
     Output: dims quantity (scalars, then the line points) and level (the input's levels, in its order);
-    value (quantity, level), cells and h (level), r21 and r32 (scalars), and per quantity apparent_order,
-    extrapolated_value, e_a21, e_ext21, gci_fine21, gci32, asymptotic_ratio, convergence_ratio, diagnosis,
-    note, quantity_units, quantity_long_name, probe_z. Input attrs are kept (its provenance prefixed
-    `input_`); the dataset's own provenance comes from provenance_attrs.
+    for each quantity q value_<q> (level) and extrapolated_value_<q> (scalar) in q's own units (CF: one unit per
+    variable); cells and h (level), r21 and r32 (scalars), and along quantity the dimensionless apparent_order,
+    e_a21, e_ext21, gci_fine21, gci32, asymptotic_ratio, convergence_ratio, diagnosis, note, and probe_z.
+    Input attrs are kept (its provenance prefixed `input_`); the dataset's own provenance comes from
+    provenance_attrs.
     """
     if "level" not in conv.dims:
         raise ValueError("not a mesh-convergence dataset: no `level` dimension")
@@ -314,14 +330,12 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
 
     h_units = "1" if measure is None else "m"
     meta = {
-        "value": ("see quantity_units", "value of the quantity on each mesh level"),
         "cells": ("1", "number of cells of the mesh"),
         "h": (h_units, "representative cell size (V/N)^(1/d)" + (", with V = 1 (relative)" if measure is None
                                                                   else "")),
         "r21": ("1", f"refinement ratio h2/h1 ({medium}/{fine})"),
         "r32": ("1", f"refinement ratio h3/h2 ({coarse}/{medium})"),
         "apparent_order": ("1", "apparent order p of Celik et al. 2008 (NaN: undefined, see note)"),
-        "extrapolated_value": ("see quantity_units", "Richardson-extrapolated value phi_ext21"),
         "e_a21": ("1", "approximate relative error |(phi1 - phi2)/phi1| (fraction)"),
         "e_ext21": ("1", "extrapolated relative error |(phi_ext21 - phi1)/phi_ext21| (fraction)"),
         "gci_fine21": ("1", "fine-grid convergence index GCI_fine21 = Fs e_a21/(r21^p - 1) (fraction)"),
@@ -331,19 +345,15 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
                                   "0 < R < ln r21/ln r32, oscillatory for R < 0"),
         "diagnosis": ("1", "convergence diagnosis: " + ", ".join(DIAGNOSES)),
         "note": ("1", "explanation of NaN or non-monotone results"),
-        "quantity_units": ("1", "units of value and extrapolated_value for each quantity"),
-        "quantity_long_name": ("1", "description of each quantity"),
         "probe_z": ("m", "axial position of the probe-line point (NaN for whole-run scalars)"),
         "quantity": ("1", "quantity of the GCI"),
         "level": ("1", "mesh level (config mesh.levels)"),
     }
     ds = xr.Dataset(
-        {"value": (("quantity", "level"), np.vstack(values)),
-         "cells": ("level", cells),
+        {"cells": ("level", cells),
          "h": ("level", np.asarray(h, dtype=float)),
          "r21": ((), r0.r21), "r32": ((), r0.r32),
          "apparent_order": ("quantity", per_q("apparent_order")),
-         "extrapolated_value": ("quantity", per_q("phi_ext21")),
          "e_a21": ("quantity", per_q("e_a21")),
          "e_ext21": ("quantity", per_q("e_ext21")),
          "gci_fine21": ("quantity", per_q("gci_fine21")),
@@ -352,14 +362,17 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
          "convergence_ratio": ("quantity", per_q("convergence_ratio")),
          "diagnosis": ("quantity", np.array([r.diagnosis for r in results], dtype=object)),
          "note": ("quantity", np.array([r.note for r in results], dtype=object)),
-         "quantity_units": ("quantity", np.array(units, dtype=object)),
-         "quantity_long_name": ("quantity", np.array(long_names, dtype=object)),
          "probe_z": ("quantity", np.array(probe_z, dtype=float))},
         coords={"quantity": ("quantity", np.array(names, dtype=object)),
                 "level": ("level", np.array(levels, dtype=object))})
     for name in ds.variables:
         u, ln = meta[str(name)]
         ds[name].attrs.update(units=u, long_name=ln)
+    for q, u, ln, val, r in zip(names, units, long_names, values, results):
+        ds[f"value_{q}"] = xr.DataArray(np.asarray(val), dims="level",
+                                        attrs={"units": u, "long_name": f"{ln}, on each mesh level"})
+        ds[f"extrapolated_value_{q}"] = xr.DataArray(r.phi_ext21, attrs={
+            "units": u, "long_name": f"{ln}, Richardson-extrapolated value phi_ext21"})
 
     attrs = {}
     for k, v in conv.attrs.items():
@@ -406,13 +419,14 @@ def gci_table(ds: xr.Dataset) -> list[dict]:
     fine, medium, coarse = ds.attrs["fine_level"], ds.attrs["medium_level"], ds.attrs["coarse_level"]
     rows = []
     for i, name in enumerate(ds["quantity"].values):
-        d = ds.isel(quantity=i)
+        d, val = ds.isel(quantity=i), quantity_values(ds, str(name))
         rows.append({
-            "quantity": str(name), "units": str(d["quantity_units"].item()),
-            f"phi1_{fine}": float(d["value"].sel(level=fine)), f"phi2_{medium}": float(d["value"].sel(level=medium)),
-            f"phi3_{coarse}": float(d["value"].sel(level=coarse)),
+            "quantity": str(name), "units": str(val.attrs["units"]),
+            f"phi1_{fine}": float(val.sel(level=fine)), f"phi2_{medium}": float(val.sel(level=medium)),
+            f"phi3_{coarse}": float(val.sel(level=coarse)),
             "r21": float(ds["r21"]), "r32": float(ds["r32"]),
-            "apparent_order": float(d["apparent_order"]), "phi_ext21": float(d["extrapolated_value"]),
+            "apparent_order": float(d["apparent_order"]),
+            "phi_ext21": float(ds[f"extrapolated_value_{name}"]),
             "e_a21": float(d["e_a21"]), "e_ext21": float(d["e_ext21"]), "gci_fine21": float(d["gci_fine21"]),
             "gci32": float(d["gci32"]), "asymptotic_ratio": float(d["asymptotic_ratio"]),
             "diagnosis": str(d["diagnosis"].item()),

@@ -3,7 +3,9 @@ standard_name), the netCDF encoding CF 1.8 accepts, the global attributes, and t
 
 Imports no dolfinx, PETSc or MPI: post-processing and figures use it without the solver stack.
 CF 1.8: coordinate variables carry no `_FillValue` (§2.5.1); integers are written as int32 (§2.2 has no
-int64 in the classic data types the checkers accept); `time` axes carry standard_name "time" (§4.4).
+int64 in the classic data types the checkers accept); the `time` axis is a CF time coordinate (§4.4):
+standard_name "time", units "s since <EPOCH>" and a calendar, the epoch standing for the start of the run
+(t = 0). Readers open with decode_times=False (ureterfsi.checked_io.open_netcdf), so time stays in seconds.
 """
 from __future__ import annotations
 
@@ -24,7 +26,7 @@ REFERENCES = ("Numerical study of fully coupled fluid-structure interaction of s
 # name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.oneway), the study datasets
 # (ureterfsi.aggregate) and the stability matrix (ureterfsi.stability)
 VARIABLES = {
-    "time": ("s", "time"),
+    "time": ("s since 2000-01-01 00:00:00", "simulated time from the start of the run (the epoch is t = 0)"),
     "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
     "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet (kidney side), positive into the ureter"),
     "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
@@ -146,6 +148,8 @@ VARIABLES = {
 
 # CF standard names (CF standard name table) of the variables that have one
 STANDARD_NAMES = {"time": "time"}
+# calendar of the time coordinate (CF §4.4.1); its epoch in VARIABLES["time"] is a stand-in for t = 0
+CALENDAR = "proleptic_gregorian"
 
 
 def cf_meta(name: str) -> tuple[str, str]:
@@ -170,10 +174,13 @@ def annotate(ds, table: dict | None = None):
 
 
 def standard_names(ds):
-    """Add the CF standard_name of the variables that have one (STANDARD_NAMES); returns ds."""
+    """Add the CF standard_name of the variables that have one (STANDARD_NAMES), and the time coordinate's
+    units and calendar (CF §4.4: "<unit> since <epoch>"); returns ds."""
     for name, sn in STANDARD_NAMES.items():
         if name in ds.variables:
             ds[name].attrs["standard_name"] = sn
+    if "time" in ds.variables:
+        ds["time"].attrs.update(units=VARIABLES["time"][0], calendar=CALENDAR)
     return ds
 
 

@@ -12,6 +12,8 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 
+from . import tags
+
 
 def _read(directory: Path, item: str) -> np.ndarray:
     """Array of an XDMF HDF DataItem text 'file.h5:/group/.../name'."""
@@ -62,82 +64,148 @@ def read_fields(directory, part: str) -> FieldSet:
     return FieldSet(directory, geom, topo.astype(np.int64), times, items, units)
 
 
-def sample(fs: FieldSet, quantity: str, time: float, points: np.ndarray, current: bool = False) -> np.ndarray:
-    """Piecewise-linear values of a nodal quantity at `points` (m; NaN outside the part's cells). current:
-    the points are in the current configuration x = X + u (the part's `displacement` at that time)."""
+def _inv3(A: np.ndarray) -> np.ndarray:
+    """Inverses of a stack of 3x3 matrices (n, 3, 3) with rows r0, r1, r2: A^-1 = [r1 x r2 | r2 x r0 | r0 x r1]
+    / det A, vectorised (numpy.linalg.inv is far slower on many small matrices, docs/fields.md)."""
+    r0, r1, r2 = A[:, 0], A[:, 1], A[:, 2]
+    adj = np.stack([np.cross(r1, r2), np.cross(r2, r0), np.cross(r0, r1)], axis=2)
+    det = np.einsum("ni,ni->n", r0, adj[:, :, 0])
+    return adj / det[:, None, None]
+
+
+def urine_fields(directory) -> FieldSet:
+    """The part of a run's field output that holds the urine: `domain` (fully coupled) or `urine` (one-way)."""
+    parts = json.loads((Path(directory) / "fields.json").read_text())["parts"]
+    name = next((p for p in ("domain", "urine") if p in parts), None)
+    if name is None:
+        raise KeyError(f"{directory}/fields.json: no part with the urine (domain or urine), has {sorted(parts)}")
+    return read_fields(directory, name)
+
+
+def urine_cells(fs: FieldSet) -> np.ndarray:
+    """Boolean mask of the part's urine cells: subdomain == tags.FLUID where the part has its cell tags (the
+    whole mesh of a fully coupled run), every cell otherwise (the one-way rung's fluid submesh)."""
+    if "subdomain" not in fs.items[0]:
+        return np.ones(len(fs.cells), dtype=bool)
+    return fs.values("subdomain", float(fs.times[0]))[:, 0] == tags.FLUID
+
+
+def sample(fs: FieldSet, quantity: str, time: float, points: np.ndarray, current: bool = False,
+           cells: np.ndarray | None = None) -> np.ndarray:
+    """Piecewise-linear values of a nodal quantity at `points` (m; NaN outside the part's cells, or outside
+    the cells of the boolean mask `cells`). current: the points are in the current configuration x = X + u
+    (the part's `displacement` at that time)."""
     from scipy.spatial import cKDTree
 
     X = fs.points + (fs.values("displacement", time) if current else 0.0)
     vals = fs.values(quantity, time)
-    tet = X[fs.cells]                                   # (cells, 4, 3)
+    conn = fs.cells if cells is None else fs.cells[cells]
+    tet = X[conn]                                       # (cells, 4, 3)
     T = np.transpose(tet[:, 1:] - tet[:, :1], (0, 2, 1))  # columns x1-x0, x2-x0, x3-x0
-    Tinv = np.linalg.inv(T)
+    Tinv = _inv3(T)
     tree = cKDTree(tet.mean(axis=1))
     out = np.full((len(points), vals.shape[1]), np.nan)
-    _, cand = tree.query(points, k=min(24, len(fs.cells)))
-    for j in range(cand.shape[1]):
-        todo = np.isnan(out[:, 0])
-        if not todo.any():
+    todo, k = np.arange(len(points)), 0
+    for kk in (24, 96):                     # nearest cell centroids first, then more for the points left
+        kk = min(kk, len(conn))
+        if not todo.size or kk <= k:
             break
-        c = cand[todo, j]
-        lam = np.einsum("nij,nj->ni", Tinv[c], points[todo] - tet[c, 0])
-        bary = np.c_[1.0 - lam.sum(axis=1), lam]
-        inside = (bary > -1e-9).all(axis=1)
-        idx = np.flatnonzero(todo)[inside]
-        out[idx] = np.einsum("ni,nic->nc", bary[inside], vals[fs.cells[c[inside]]])
+        cand = tree.query(points[todo], k=kk)[1].reshape(todo.size, -1)[:, k:]
+        for j in range(cand.shape[1]):
+            c = cand[:, j]
+            lam = np.einsum("nij,nj->ni", Tinv[c], points[todo] - tet[c, 0])
+            bary = np.c_[1.0 - lam.sum(axis=1), lam]
+            inside = (bary > -1e-9).all(axis=1) & np.isnan(out[todo, 0])
+            out[todo[inside]] = np.einsum("ni,nic->nc", bary[inside], vals[conn[c[inside]]])
+        todo, k = todo[np.isnan(out[todo, 0])], kk
     return out
 
 
-def fig_hole_flow(fs: FieldSet, times, hole_z: float, geom, title: str, half_width: float = 2.0e-3):
-    """Urine velocity in the plane x = 0 around the side hole at z = hole_z, current configuration, at each
-    of `times`: speed (colour) and streamlines of the in-plane velocity (v_y, v_z); stent wall and hole outlined."""
+@dataclass
+class Section:
+    """Values sampled on a grid of the plane x = 0: y, z (m, 1-D axes) and per time (s) an array (y, z, ...)."""
+    y: np.ndarray
+    z: np.ndarray
+    times: list
+    values: list
+
+
+def hole_flow_section(fs: FieldSet, times, hole_z: float, geom, half_width: float = 2.0e-3, y=None,
+                      z=None) -> Section:
+    """Urine velocity (m s-1) on the plane x = 0 in the current configuration at each of `times`, NaN off the
+    urine; on the axes y, z (m), by default 90 points over 0 <= y <= 1.05 R_i and 120 over |z - hole_z| <=
+    half_width (within the segment) around the side hole at z = hole_z."""
+    y = np.linspace(0.0, geom.ureter_inner_radius * 1.05, 90) if y is None else np.asarray(y, float)
+    z = (np.linspace(max(hole_z - half_width, 0.0), min(hole_z + half_width, geom.length), 120) if z is None
+         else np.asarray(z, float))
+    ny, nz = y.size, z.size
+    Y, Z = np.meshgrid(y, z, indexing="ij")
+    pts = np.c_[np.zeros(Y.size), Y.ravel(), Z.ravel()]
+    urine = urine_cells(fs)
+    vals = [sample(fs, "velocity", t, pts, current=True, cells=urine).reshape(ny, nz, -1) for t in times]
+    return Section(y, z, [float(t) for t in times], vals)
+
+
+def fig_hole_flow(sec: Section, hole_z: float, geom, title: str):
+    """The Section of hole_flow_section: urine speed |v| (colour, one scale for every instant) and streamlines
+    of the in-plane velocity (v_y, v_z); the stent wall (grey) with the hole, and the ureter inner wall at rest
+    (dashed) outlined."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    ny, nz = 90, 120
-    y = np.linspace(0.0, geom.ureter_inner_radius * 1.05, ny)
-    z = np.linspace(hole_z - half_width, hole_z + half_width, nz)
-    Y, Z = np.meshgrid(y, z, indexing="ij")
-    pts = np.c_[np.zeros(Y.size), Y.ravel(), Z.ravel()]
-    fig, axes = plt.subplots(1, len(times), figsize=(3.2 * len(times) + 1.0, 4.2), sharey=True, constrained_layout=True)
+    fig, axes = plt.subplots(1, len(sec.times), figsize=(3.2 * len(sec.times) + 1.0, 4.2), sharey=True,
+                             constrained_layout=True)
     axes = np.atleast_1d(axes)
-    fields = [sample(fs, "velocity", t, pts, current=True).reshape(ny, nz, -1) for t in times]
-    vmax = max(float(np.nanmax(np.linalg.norm(v, axis=2))) for v in fields) * 1e3
-    for ax, t, v in zip(axes, times, fields):
+    vmax = max(float(np.nanmax(np.linalg.norm(v, axis=2))) for v in sec.values) * 1e3
+    zmm, ymm = sec.z * 1e3, sec.y * 1e3
+    ri, ro, rh = geom.stent_inner_radius * 1e3, geom.stent_outer_radius * 1e3, geom.hole_radius * 1e3
+    zl, zh = zmm[0], zmm[-1]
+    for ax, t, v in zip(axes, sec.times, sec.values):
         speed = np.linalg.norm(v, axis=2) * 1e3
-        im = ax.pcolormesh(Z * 1e3, Y * 1e3, speed, shading="auto", cmap="viridis", vmin=0.0, vmax=vmax)
-        vy, vz = np.nan_to_num(v[..., 1]), np.nan_to_num(v[..., 2])
-        ax.streamplot(z * 1e3, y * 1e3, vz, vy, color="w", density=1.1, linewidth=0.6, arrowsize=0.7)
-        ri, ro, rh = geom.stent_inner_radius * 1e3, geom.stent_outer_radius * 1e3, geom.hole_radius * 1e3
-        zl, zh = (hole_z - half_width) * 1e3, (hole_z + half_width) * 1e3
+        im = ax.pcolormesh(zmm, ymm, speed, shading="auto", cmap="viridis", vmin=0.0, vmax=vmax)
+        vy, vz = np.ma.masked_invalid(v[..., 1]), np.ma.masked_invalid(v[..., 2])
+        ax.streamplot(zmm, ymm, vz, vy, color="w", density=1.1, linewidth=0.6, arrowsize=0.7)
         for a, b in ((zl, hole_z * 1e3 - rh), (hole_z * 1e3 + rh, zh)):
             ax.add_patch(Rectangle((a, ri), b - a, ro - ri, facecolor="0.6", edgecolor="k", lw=0.8))
+        ax.axhline(geom.ureter_inner_radius * 1e3, color="k", ls="--", lw=0.8)
         ax.set_title(f"t = {t:g} s")
         ax.set_xlabel("z (mm)")
         ax.set_xlim(zl, zh)
+        ax.set_ylim(ymm[0], ymm[-1])
+        ax.set_facecolor("0.85")
     axes[0].set_ylabel("y (mm), plane x = 0")
     fig.colorbar(im, ax=axes, label="urine speed |v| (mm s$^{-1}$)")
     fig.suptitle(title)
     return fig
 
 
-def fig_pressure_along(fs: FieldSet, times, geom, p_ref: float, title: str):
-    """Urine pressure minus the reference pressure along the segment at each of `times`: on the ureter inner
-    wall (r = R_i, plane y = 0) and in the stent lumen (r = r_i / 2) or on the axis without a stent."""
+def pressure_lines(fs: FieldSet, times, geom, n: int = 300) -> dict:
+    """Urine pressure (Pa) along z at each of `times` on two lines of the plane y = 0 (reference
+    configuration, which the ALE mesh keeps on the moving wall): the ureter inner wall r = R_i and the stent
+    lumen r = r_i / 2. Returns {label: (z, array (time, z))}."""
+    z = np.linspace(0.0, geom.length, n)
+    radii = {"ureter inner wall": geom.ureter_inner_radius * (1 - 1e-6),
+             "stent lumen (r = r_i / 2)": 0.5 * geom.stent_inner_radius}
+    urine = urine_cells(fs)
+    return {label: (z, np.array([sample(fs, "pressure", t, np.c_[np.full_like(z, r), np.zeros_like(z), z],
+                                        cells=urine)[:, 0] for t in times]))
+            for label, r in radii.items()}
+
+
+def fig_pressure_along(lines: dict, times, p_ref: float, pulse_centres, title: str):
+    """The lines of pressure_lines, p - p_ref, one panel per line and one curve per time; the pulse centre
+    at each time marked (dotted)."""
     import matplotlib.pyplot as plt
 
-    z = np.linspace(0.0, geom.length, 300)
-    lines = {"ureter inner wall": geom.ureter_inner_radius * (1 - 1e-6),
-             "lumen (stent or axis)": 0.5 * geom.stent_inner_radius}
     fig, axes = plt.subplots(len(lines), 1, figsize=(7.0, 5.5), sharex=True, constrained_layout=True)
-    for ax, (label, r) in zip(axes, lines.items()):
-        pts = np.c_[np.full_like(z, r), np.zeros_like(z), z]
-        for t in times:
-            p = sample(fs, "pressure", t, pts)[:, 0]
-            ax.plot(z * 1e3, p - p_ref, label=f"t = {t:g} s")
+    for ax, (label, (z, p)) in zip(axes, lines.items()):
+        for k, t in enumerate(times):
+            (line,) = ax.plot(z * 1e3, p[k] - p_ref, label=f"t = {t:g} s")
+            ax.axvline(pulse_centres[k] * 1e3, color=line.get_color(), ls=":", lw=0.8)
         ax.set_ylabel(f"p - p_ref (Pa)\n{label}")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel("z (mm), inlet 0 to outlet")
+    axes[-1].set_xlabel("z (mm), inlet (kidney) 0 to outlet (bladder)")
+    axes[-1].set_xlim(0.0, z[-1] * 1e3)
     fig.suptitle(title)
     return fig

@@ -357,7 +357,8 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
              spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
     settings = time_settings(cfg, spec, checkpoint_path)
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
-    fields = field_writer(cfg, out_path, lambda q: coupled_parts(pb, obs.stent if obs.has_stent else None, q),
+    fields = field_writer(cfg, out_path, lambda q: coupled_parts(pb, obs.stent if obs.has_stent else None, q,
+                                                                 cfg["fluid"]["reference_pressure"]),
                           settings.end, comm)
     integrator = integrate_from_rest(pb, settings, [obs] + ([fields] if fields else []),
                                      cfg["fluid"]["reference_pressure"])

@@ -7,7 +7,7 @@ from ureterfsi.plotting import save_figure
 from ureterfsi.plotting_designs import parameters_figure, sensitivity_figure
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO)  # noqa: F821
-ds = xr.load_dataset(snakemake.input[0])  # noqa: F821
+ds = xr.load_dataset(snakemake.input[0], decode_times=False)  # noqa: F821
 draw = sensitivity_figure if snakemake.rule == "design_sensitivity" else parameters_figure  # noqa: F821
 save_figure(draw(ds), list(snakemake.output), dpi=snakemake.params.dpi)  # noqa: F821
 logging.info("%s -> %s", snakemake.rule, list(snakemake.output))  # noqa: F821

@@ -20,10 +20,9 @@ def run_gci():
     logging.info("levels fine/medium/coarse = %s, r21 = %.4g, r32 = %.4g", ds.attrs["gci_levels"],
                  float(ds["r21"]), float(ds["r32"]))
     for i, q in enumerate(ds["quantity"].values):
-        d = ds.isel(quantity=i)
+        d, ext = ds.isel(quantity=i), ds[f"extrapolated_value_{q}"]
         logging.info("%s: p = %.4g, phi_ext = %.6g %s, GCI_fine21 = %.4g %%, %s %s", q, d["apparent_order"],
-                     d["extrapolated_value"], d["quantity_units"].item(), 100 * float(d["gci_fine21"]),
-                     d["diagnosis"].item(), d["note"].item())
+                     ext, ext.attrs["units"], 100 * float(d["gci_fine21"]), d["diagnosis"].item(), d["note"].item())
 
 
 def run_table():

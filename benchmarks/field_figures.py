@@ -1,0 +1,82 @@
+"""Cost of the field figures' sampling (ureterfsi.plotting_fields) on the default configuration's field model:
+the model-3 coarse quarter mesh of config/config.yaml, its urine cells, synthetic nodal values (the cost does
+not depend on the values), the four instants of Figs. 6-9. Numbers: docs/fields.md.
+
+    .venv/bin/python benchmarks/field_figures.py [--work DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import netCDF4  # noqa: F401,E402  (before dolfinx: see ureterfsi/__init__.py)
+import numpy as np  # noqa: E402
+
+from ureterfsi import tags  # noqa: E402
+from ureterfsi.config import load_config  # noqa: E402
+from ureterfsi.geometry import UreterGeometry  # noqa: E402
+from ureterfsi.mesh import build_mesh  # noqa: E402
+from ureterfsi.plotting_fields import FieldSet, hole_flow_section, pressure_lines  # noqa: E402
+
+
+def urine_tets(msh: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(vertex coordinates, urine tetrahedra as vertex indices) of a gmsh mesh."""
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.open(str(msh))
+        node_tags, coords, _ = gmsh.model.mesh.getNodes()
+        index = np.full(int(node_tags.max()) + 1, -1)
+        index[node_tags] = np.arange(node_tags.size)
+        cells = []
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(3, tags.FLUID):
+            for etype, _, nodes in zip(*gmsh.model.mesh.getElements(3, entity)):
+                n = gmsh.model.mesh.getElementProperties(etype)[3]
+                cells.append(index[np.asarray(nodes).reshape(-1, n)[:, :4]])
+        return coords.reshape(-1, 3), np.vstack(cells)
+    finally:
+        gmsh.finalize()
+
+
+class SyntheticFields(FieldSet):
+    """A FieldSet on given vertices and cells whose every quantity is fixed random nodal values."""
+
+    def values(self, quantity, time):
+        n = len(self.points)
+        return {"pressure": np.ones((n, 1)), "displacement": np.zeros((n, 3))}.get(
+            quantity, np.random.default_rng(0).normal(size=(n, 3)))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", type=Path, default=ROOT / "results" / "benchmarks" / "field_figures")
+    args = ap.parse_args()
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    args.work.mkdir(parents=True, exist_ok=True)
+    msh = args.work / "model3_coarse.msh"
+    if not msh.exists():
+        build_mesh(cfg, "3", "coarse", "quarter", msh, msh.with_suffix(".json"))
+    points, cells = urine_tets(msh)
+    times = [float(t) for t in cfg["figures"]["hole_velocity_times"]]
+    fs = SyntheticFields(args.work, points, cells, np.array(sorted(set(times))), [{}], {})
+    g = UreterGeometry.from_config(cfg)
+    hole_z = g.length - g.hole_end_clearance
+    tic = time.perf_counter()
+    sec = hole_flow_section(fs, times, hole_z, g)
+    t_sec = time.perf_counter() - tic
+    tic = time.perf_counter()
+    pressure_lines(fs, [float(t) for t in cfg["figures"]["wave_times"]], g)
+    t_lines = time.perf_counter() - tic
+    print(f"urine cells {len(cells)}, vertices {len(points)}")
+    print(f"hole section, {len(times)} instants x {sec.y.size * sec.z.size} points: {t_sec:.2f} s")
+    print(f"pressure lines, {len(cfg['figures']['wave_times'])} instants x 2 lines x 300 points: {t_lines:.2f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,58 @@
+# Figures drawn from the field files of one run (ureterfsi.fields, ureterfsi.plotting_fields; beyond the
+# paper): the urine flow on the mid-plane around the outlet-most side hole at the instants of Figs. 6-9, and
+# the urine pressure along the segment at the instants of Fig. 5. The run is the study run of the Fig. 2
+# model (figures.domain_model), so the figures cost only their plotting. Target: all_field_figures (in all).
+
+FIELD_MODEL = FIGURE2_MODEL
+FIELD_RUN = run_file(FIELD_MODEL, STUDY_LEVEL)
+# the field files exist (config fields.enabled) and the model has side holes in a 3D mesh
+FIELD_FIGURES = (
+    config["fields"]["enabled"]
+    and config["models"][FIELD_MODEL]["stent"]
+    and run_symmetry(FIELD_MODEL) != "axisymmetric"
+)
+
+
+def field_figure_outputs(stem):
+    """results/figures/<stem>.<ext> for every configured format, the report format in category Fields."""
+    out = []
+    for ext in FIGURE_FORMATS:
+        path = f"results/figures/{stem}.{ext}"
+        if ext == REPORT_FORMAT:
+            path = report(path, caption=f"../report/{stem}.rst", category="Fields")
+        out.append(path)
+    return out
+
+
+rule field_hole_flow:
+    input:
+        run=FIELD_RUN,
+    output:
+        field_figure_outputs("field_hole_flow"),
+    log:
+        "results/logs/figures/field_hole_flow.log",
+    params:
+        figures=FIGURE_OPTIONS,
+        times=list(HOLE_TIMES.values()),
+    script:
+        "../scripts/field_figures.py"
+
+
+rule field_pressure:
+    input:
+        run=FIELD_RUN,
+    output:
+        field_figure_outputs("field_pressure"),
+    log:
+        "results/logs/figures/field_pressure.log",
+    params:
+        figures=FIGURE_OPTIONS,
+        times=WAVE_TIMES,
+    script:
+        "../scripts/field_figures.py"
+
+
+rule all_field_figures:
+    input:
+        rules.field_hole_flow.output if FIELD_FIGURES else [],
+        rules.field_pressure.output if FIELD_FIGURES else [],
