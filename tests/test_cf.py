@@ -58,12 +58,11 @@ def stability_case(name: str, axis: str, steps: int) -> xr.Dataset:
     per_step = {"time", *S.PER_STEP}
     strings = {"axis": axis, "value_label": "0.1", "outcome": "stable", "limit": "", "diagnosis": "",
                "mesh_level": "coarse", "scene": "rz"}
-    scalars = {k: ((), strings.get(k, 1.0)) for k in S.CF if k not in per_step | {"case", "step", "halving_time"}}
+    scalars = {k: ((), strings.get(k, 1.0)) for k in S.SCALARS}
     series = {k: ("step", np.linspace(0.0, 1.0, steps)) for k in per_step - {"time"}}
     ds = xr.Dataset(scalars | series, coords={"step": np.arange(steps), "time": ("step", np.linspace(0, 0.1, steps))})
     ds = ds.assign_coords(case=name)
-    for v in ds.variables:
-        ds[v].attrs.update(units=S.CF[v][0], long_name=S.CF[v][1])
+    metadata.annotate(ds)
     ds.attrs.update(case=name, title=f"synthetic stability case {name}")
     return ds
 

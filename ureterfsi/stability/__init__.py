@@ -13,10 +13,10 @@ dataset   the per-case file, the combined matrix, its outcome table
 """
 from .cases import AXES, AXIS, AXIS_PARAMETER, SCENES, SYMMETRY, Axis, Case, case_by_name, case_setup, cases
 from .cases import format_value, settings
-from .dataset import CASE_FILE, PER_STEP, SERIES, combine, outcome_table, write_case
+from .dataset import CASE_FILE, PER_STEP, SCALARS, SERIES, combine, outcome_table, write_case
 from .limits import LIMITS, StabilityLimit
 from .run import run_case
 
-__all__ = ["AXES", "AXIS", "AXIS_PARAMETER", "Axis", "CASE_FILE", "Case", "LIMITS", "PER_STEP", "SCENES", "SERIES",
-           "SYMMETRY", "StabilityLimit", "case_by_name", "case_setup", "cases", "combine", "format_value",
+__all__ = ["AXES", "AXIS", "AXIS_PARAMETER", "Axis", "CASE_FILE", "Case", "LIMITS", "PER_STEP", "SCALARS", "SCENES",
+           "SERIES", "SYMMETRY", "StabilityLimit", "case_by_name", "case_setup", "cases", "combine", "format_value",
            "outcome_table", "run_case", "settings", "write_case"]

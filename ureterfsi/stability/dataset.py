@@ -16,6 +16,14 @@ SERIES = ("time", "dt", "kinetic_energy", "kinetic_energy_fluid", "kinetic_energ
           "volume_from_flux", "outlet_flux", "inlet_flux", "min_ale_jacobian", "max_displacement", "max_speed")
 PER_STEP = tuple(k for k in SERIES if k != "time") + ("volume_balance_error", "newton_iterations",
                                                        "step_wall_time")
+# the per-case scalars of a case file (run_case), in the order written
+SCALARS = ("axis", "value_label", "outcome", "limit", "diagnosis", "failure_time", "failure_r", "failure_z",
+           "pulse_centre_at_failure", "scene", "time_step", "mesh_level", "cells", "dofs", "hole_elements",
+           "is_baseline", "hole_elements_measured", "hole_channels_found", "mesh_min_quality", "bulk_ratio",
+           "density_ratio", "peak_traction", "wave_speed", "wave_width", "dynamic_viscosity", "end_time",
+           "reached_time", "steps", "max_kinetic_energy", "max_energy_ratio", "displaced_volume", "volume_error",
+           "min_jacobian", "peak_displacement", "peak_speed", "total_newton_iterations", "mean_newton_iterations",
+           "max_newton_iterations", "step_halvings", "factorisations", "wall_time", "wall_time_per_step")
 # what combine reads in a per-case file (run_case)
 CASE_FILE = Contract("stability case file", attrs=("case",), variables=("case", "step", "time", "outcome"))
 

@@ -15,7 +15,7 @@ from ..checked_io import MESH_SIDECAR, read_json
 from ..metadata import annotate
 from ..provenance import provenance_attrs
 from .cases import SCENES, Case, case_setup, format_value, settings
-from .dataset import SERIES
+from .dataset import SCALARS, SERIES
 from .limits import StabilityLimit
 
 log = logging.getLogger("ureterfsi.stability")
@@ -227,6 +227,8 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
         "wall_time": wall,
         "wall_time_per_step": float(swall[1:].mean()) if n > 1 else math.nan,
     }
+    if tuple(scalars) != SCALARS:
+        raise RuntimeError(f"case scalars {tuple(scalars)} differ from stability.dataset.SCALARS")
     ds = xr.Dataset({k: ((), v) for k, v in scalars.items()} | data,
                     coords={"step": np.arange(n), "time": ("step", np.asarray(series["time"], float))})
     ds = ds.assign_coords(case=case.name)
