@@ -11,6 +11,7 @@ from snakemake.utils import min_version
 
 min_version("9.0")
 
+
 configfile: "config/config.yaml"
 
 
@@ -36,7 +37,7 @@ include: "workflow/rules/designs.smk"
 
 
 rule all:
+    default_target: True
     input:
         rules.all_figures.input,
         rules.calibration.output,
-    default_target: True
