@@ -407,7 +407,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
                                  description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
-    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON (from Snakemake)")
+    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON")
     ap.add_argument("--run-config", default=None,
                     help="the sections this solve reads as JSON (ureterfsi.config.run_sections; rule solve)")
     ap.add_argument("--model", required=True)
