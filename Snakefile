@@ -5,29 +5,13 @@
 #   snakemake --cores 2 all_field_figures   the figures drawn from the field files
 #   snakemake --report report.html      HTML report with every figure and its caption
 # Configuration: config/config.yaml, validated against workflow/schemas/config.schema.yaml
-# and by ureterfsi.config (geometric consistency) before any rule runs.
-import sys
-
+# and by ureterfsi.config (geometric consistency) before any rule runs (workflow/rules/common.smk).
 from snakemake.utils import min_version
 
 min_version("9.0")
 
+
 configfile: "config/config.yaml"
-
-
-# Validation at the edge: one clear line naming the key and the constraint, non-zero exit, no output.
-# Every config file is re-read by read_yaml (Snakemake's loader lets a key given twice win silently), and the
-# --config values by read_config_args (Snakemake's parser makes every nested scalar a string).
-from ureterfsi.config import ConfigError, deep_merge, read_config_args, read_yaml, validate_config
-
-try:
-    for path in workflow.configfiles:
-        read_yaml(path)
-    config.update(deep_merge(config, read_config_args(workflow.config_settings.config_args)))
-    validate_config(config)
-except ConfigError as err:
-    sys.stderr.write(f"{err}\n")
-    sys.exit(2)
 
 
 include: "workflow/rules/common.smk"
@@ -43,8 +27,8 @@ include: "workflow/rules/designs.smk"
 
 
 rule all:
+    default_target: True
     input:
         rules.all_figures.input,
         rules.all_field_figures.input,
         rules.calibration.output,
-    default_target: True

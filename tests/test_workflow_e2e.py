@@ -286,21 +286,48 @@ def test_report_holds_every_figure(e2e):
     assert "t = 0.04 s" in html and "snakemake.params" not in html
 
 
-def test_slurm_profile_plans_the_jobs(e2e, tmp_path):
+def planned_jobs(text: str) -> list[dict]:
+    """The jobs of a dry run (-n -p): rule, output, resources {name: value} and the shell command."""
+    jobs = []
+    for block in re.split(r"^rule ", text, flags=re.M)[1:]:
+        rule, _, rest = block.partition(":\n")
+        fields = dict(line.strip().split(": ", 1) for line in rest.splitlines()
+                      if line.startswith("    ") and ": " in line)
+        shell = re.search(r"^Shell command: (.*)$", rest, re.M)
+        jobs.append({"rule": rule, "output": fields.get("output", ""), "shell": shell.group(1) if shell else None,
+                     "resources": dict(kv.split("=", 1) for kv in fields.get("resources", "").split(", ") if kv)})
+    return jobs
+
+
+def test_slurm_profile_plans_the_jobs(tmp_path):
     """Dry run with the SLURM workflow profile (executor slurm): the plugin does not call sbatch/sinfo in a
-    dry run. The profile's configfiles (config/config.yaml + paper-meshes.yaml, relative to the working
-    directory) are replaced by the command line's --configfile."""
+    dry run. The profile's configfiles (config/config.yaml + overlays, relative to the working directory) are
+    replaced by the command line's --configfile. A fully coupled 3D solve is an MPI job (tasks > 1, mpi=srun,
+    its command launching the ranks with srun); the r-z solve of model 1 is serial (one task, no mpi resource);
+    memory is mem_mb only, and the solve's command shows in the plan."""
+    cfg_path = tmp_path / "e2e-config.yaml"
+    cfg = e2e_config(cfg_path)
     work = tmp_path / "slurm"
     work.mkdir()
-    run = snakemake(work, e2e.cfg_path, "-n", "--forceall", profile=SLURM_PROFILE)
-    out = ok(run)
+    out = ok(snakemake(work, cfg_path, "-n", "--forceall", profile=SLURM_PROFILE))
     counts = job_counts(out)
-    n = len(e2e.models)
+    n = len(cfg["models"])
     assert counts.get("mesh") == n and counts.get("solve") == n and set(FIGURES) <= set(counts), out
-    # solves are planned as 32-rank MPI jobs launched by srun
-    solve_jobs = out.split("rule solve:")[1:]
-    assert solve_jobs and all("tasks=32" in j.split("rule ")[0] and "mpi=srun" in j.split("rule ")[0]
-                              for j in solve_jobs), solve_jobs[:1]
+    jobs = planned_jobs(out)
+    solves = {Path(j["output"]).stem: j for j in jobs if j["rule"] == "solve"}
+    level = cfg["study"]["level"]
+    mpi, serial = solves[f"model2_{level}"], solves[f"model1_{level}"]
+    assert "/fully_coupled/quarter/" in mpi["output"] and "/axisymmetric/" in serial["output"]
+    tasks = int(mpi["resources"]["tasks"])
+    assert tasks > 1 and mpi["resources"]["mpi"] == "srun", mpi
+    assert re.search(rf"^OPENBLAS_NUM_THREADS=1 srun -n {tasks} \S*python\S* -m ureterfsi\.study ", mpi["shell"]), mpi
+    assert serial["resources"]["tasks"] == "1" and "mpi" not in serial["resources"], serial
+    assert "srun" not in serial["shell"] and " -m ureterfsi.study " in serial["shell"], serial
+    for name, j in ((f"model2_{level}", mpi), (f"model1_{level}", serial)):
+        assert f"--run-config results/configs/{name.split('_')[0]}.json" in j["shell"], j
+    assert [j["rule"] for j in jobs if "mpi" in j["resources"]] == ["solve"], "only the 3D fully coupled solve"
+    assert all("mem_mb_per_cpu" not in j["resources"] for j in jobs)
+    assert all("mem_mb" in j["resources"] for j in jobs if j["rule"] in ("solve", "mesh", "wall_motion"))
 
 
 def _solve_again(e2e, model, *args, **popen):

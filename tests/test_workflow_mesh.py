@@ -102,3 +102,21 @@ def test_local_runs_get_a_memory_budget(tmp_path):
         assert run.returncode == 0, run.stderr[-3000:]
         budget = [line.split()[1] for line in run.stderr.splitlines() if line.startswith("BUDGET")]
         assert budget and int(budget[0]) == expected
+
+
+def test_physical_memory_is_memtotal(tmp_path):
+    """ureterfsi.machine.physical_memory_mib (the local budget's base): MemTotal in MiB; the kernel's count of
+    physical pages on this machine; a file without MemTotal is named in the error."""
+    import os
+
+    import pytest
+
+    from ureterfsi.machine import physical_memory_mib
+
+    fake = tmp_path / "meminfo"
+    fake.write_text("MemFree:  1024 kB\nMemTotal:  2048000 kB\n")
+    assert physical_memory_mib(str(fake)) == 2000
+    assert physical_memory_mib() == os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2**20
+    fake.write_text("MemFree:  1024 kB\n")
+    with pytest.raises(ValueError, match="meminfo: no MemTotal"):
+        physical_memory_mib(str(fake))

@@ -608,13 +608,22 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
 WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness")
 
 
-RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")
 
 
 def run_sections(cfg: dict, model: str) -> dict:
     """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
     the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
     return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
+
+
+def run_config(sections: dict, model: str) -> dict:
+    """The configuration of one solve from what run_sections(cfg, model) returned (rule solve's config file):
+    those sections, `models` holding the run's model alone."""
+    want = set(RUN_SECTIONS) | {"model"}
+    if set(sections) != want:
+        raise ConfigError("<run config>", f"must hold exactly the sections {sorted(want)}, got {sorted(sections)}")
+    return {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
 
 
 def wall_sections(cfg: dict) -> dict:

@@ -399,13 +399,15 @@ def main(argv=None) -> int:
     from mpi4py import MPI as _MPI
 
     from .checked_io import BadFile
-    from .config import ConfigError, load_config, load_config_files
+    from .config import ConfigError, load_config, load_config_files, run_config
     from .fsi import SolveFailure
 
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
                                  description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
-    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON (from Snakemake)")
+    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON")
+    ap.add_argument("--run-config", default=None,
+                    help="the sections this solve reads as JSON (ureterfsi.config.run_sections; rule solve)")
     ap.add_argument("--model", required=True)
     ap.add_argument("--level", required=True)
     ap.add_argument("--symmetry", required=True)
@@ -422,7 +424,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     configure_logging()
     try:
-        if args.config_json:
+        if args.run_config:
+            with open(args.run_config) as fh:
+                cfg = run_config(json.load(fh), args.model)
+        elif args.config_json:
             with open(args.config_json) as fh:
                 cfg = load_config(json.load(fh))
         else:

@@ -6,9 +6,6 @@
 rule calibration:
     output:
         "results/calibration/wall_calibration.json",
-    params:
-        # rerun trigger and the only input: the configuration sections the study reads
-        sections=lambda w: {k: config[k] for k in ("geometry", "ureter", "peristalsis", "time")},
     log:
         "results/logs/calibration/wall_calibration.log",
     benchmark:
@@ -17,5 +14,10 @@ rule calibration:
     resources:
         mem_mb=2000,
         runtime=30,
+    params:
+        # rerun trigger and the only input: the configuration sections the study reads
+        sections=lambda w: {
+            k: config[k] for k in ("geometry", "ureter", "peristalsis", "time")
+        },
     script:
         "../scripts/calibration.py"

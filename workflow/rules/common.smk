@@ -1,12 +1,78 @@
-# Shared helpers of the workflow rules: wildcard constraints and lists derived from the config.
+# Shared part of the workflow rules: lists derived from the config, the local memory budget, wildcard
+# constraints, and every function the rule files call (input functions, params, resources).
+import json
 import sys
 
-from ureterfsi.config import unmakeable
+from ureterfsi import designs as ureter_designs
+from ureterfsi.config import (
+    ConfigError,
+    deep_merge,
+    read_config_args,
+    read_yaml,
+    run_sections,
+    unmakeable,
+    validate_config,
+    wall_sections,
+)
+from ureterfsi.machine import physical_memory_mib
+from ureterfsi.stability import case_by_name, case_setup
+from ureterfsi.stability import cases as stability_cases
+
+# Validation at the edge: one clear line naming the key and the constraint, non-zero exit, no output.
+# Every config file is re-read by read_yaml (Snakemake's loader lets a key given twice win silently), and the
+# --config values by read_config_args (Snakemake's parser makes every nested scalar a string).
+try:
+    for path in workflow.configfiles:
+        read_yaml(path)
+    config.update(
+        deep_merge(config, read_config_args(workflow.config_settings.config_args))
+    )
+    validate_config(config)
+except ConfigError as err:
+    sys.stderr.write(f"{err}\n")
+    sys.exit(2)
+
 
 MODELS = sorted(config["models"])
 LEVELS = list(config["mesh"]["levels"])
 SYMMETRY = config["mesh"]["symmetry"]
 FIDELITY = config["study"]["fidelity"]
+STUDY_LEVEL = config["study"]["level"]
+CONVERGENCE_MODEL = str(config["study"]["convergence_model"])
+FIGURE_OPTIONS = config["figures"]
+FIGURE_FORMATS = list(FIGURE_OPTIONS["formats"])
+# the report shows one file per figure: the raster format when there is one
+REPORT_FORMAT = "png" if "png" in FIGURE_FORMATS else FIGURE_FORMATS[0]
+WALL_MOTION = "results/runs/one_way/wall_motion.nc"
+DESIGNS = ureter_designs.studies(config)
+STABILITY_CASES = (
+    [c.name for c in stability_cases(config)] if "stability" in config else []
+)
+
+# Memory budget of local runs. Solves reserve mem_mb (study.memory_mb), but Snakemake holds reservations only
+# against a global `--resources mem_mb=...`, which the command line or a profile sets - and the workflow profile
+# under workflow/profiles/ is not searched when the Snakefile sits at the repository root. Without a budget a
+# plain `snakemake --cores 2` started the fine and medium runs side by side (15.6 + 8.8 GiB on 24 GiB). So
+# unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb. A cluster run
+# (--jobs: resource_settings.nodes; the executor itself is not known yet when the Snakefile is read) gets none:
+# its scheduler holds each job's mem_mb, and a budget of the submit host's memory would cap every job's.
+if (
+    workflow.resource_settings.nodes is None
+    and "mem_mb" not in workflow.global_resources
+):
+    workflow.register_resource(
+        "mem_mb",
+        physical_memory_mib() - int(config["study"]["memory_headroom_mb"]),
+    )
+
+
+# model and level as the schema spells them (not only the configured ones): refuse_unmakeable
+# names the reason
+wildcard_constraints:
+    model="[1-9][0-9]*",
+    level="[A-Za-z][A-Za-z0-9_]*",
+    symmetry="full|half|quarter|axisymmetric",
+    fidelity="fully_coupled|one_way",
 
 
 def run_symmetry(model):
@@ -19,27 +85,38 @@ def run_fidelity(model):
     return config["study"]["runs"].get(str(model), {}).get("fidelity", FIDELITY)
 
 
-def local_memory_budget_mb(headroom_mb):
-    """Physical memory of this machine (MemTotal of /proc/meminfo) less a headroom for the OS, MiB."""
-    with open("/proc/meminfo") as fh:
-        total_kib = next(int(line.split()[1]) for line in fh if line.startswith("MemTotal:"))
-    return total_kib // 1024 - int(headroom_mb)
+def run_file(model, level):
+    """Per-run probe dataset of one stent model on one mesh level (written by the solve rule), at the
+    model's fidelity rung and mesh symmetry (study.fidelity, mesh.symmetry, study.runs).
+    """
+    return f"results/runs/{run_fidelity(model)}/{run_symmetry(model)}/model{model}_{level}.nc"
 
 
-# Memory budget of local runs. Solves reserve mem_mb (study.memory_mb), but Snakemake holds reservations only
-# against a global `--resources mem_mb=...`, which the command line or a profile sets - and the workflow profile
-# under workflow/profiles/ is not searched when the Snakefile sits at the repository root. Without a budget a
-# plain `snakemake --cores 2` started the fine and medium runs side by side (15.6 + 8.8 GiB on 24 GiB). So
-# unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb.
-if workflow.local_exec and "mem_mb" not in workflow.global_resources:
-    workflow.register_resource("mem_mb", local_memory_budget_mb(config["study"]["memory_headroom_mb"]))
+def mesh_sidecar(model, level):
+    """JSON sidecar of the mesh of one stent model on one mesh level (the mesh its study runs use)."""
+    return f"results/meshes/{run_symmetry(model)}/model{model}_{level}.json"
+
+
+def figure_outputs(stem, category="Paper figures"):
+    """results/figures/<stem>.<ext> for every configured format; the report format goes into the report
+    (caption workflow/report/<stem>.rst)."""
+    out = []
+    for ext in FIGURE_FORMATS:
+        path = f"results/figures/{stem}.{ext}"
+        if ext == REPORT_FORMAT:
+            path = report(path, caption=f"../report/{stem}.rst", category=category)
+        out.append(path)
+    return out
 
 
 def level_priority(w):
     """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
     run of the mesh study is the critical path of the default reproduction: it starts as soon as its mesh exists
     and the memory budget allows, and the coarse runs fill the other core around it)."""
-    factors = sorted({float(v["size_factor"]) for v in config["mesh"]["levels"].values()}, reverse=True)
+    factors = sorted(
+        {float(v["size_factor"]) for v in config["mesh"]["levels"].values()},
+        reverse=True,
+    )
     return factors.index(float(config["mesh"]["levels"][w.level]["size_factor"]))
 
 
@@ -51,22 +128,164 @@ def solve_mem_mb(fidelity, symmetry, level):
     if symmetry == "axisymmetric":
         return int(table["axisymmetric"])
     per_level = table[fidelity]
-    return int(per_level.get(level, max(per_level.values())) * table["symmetry_factor"][symmetry])
+    return int(
+        per_level.get(level, max(per_level.values()))
+        * table["symmetry_factor"][symmetry]
+    )
 
 
 def refuse_unmakeable(w):
-    """Input function (no input) of rule mesh: a mesh the configuration cannot make, and so every run on it, is
-    refused before any job starts, in one line on stderr (an exception here would print a traceback)."""
+    """Input function (no input) of rule mesh: a mesh the configuration cannot make, and so every run
+    on it, is refused before any job starts, in one line on stderr (an exception here would print a
+    traceback)."""
     reason = unmakeable(config, w.model, w.level, w.symmetry)
     if reason:
-        sys.stderr.write(f"target error: results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh: {reason}\n")
+        sys.stderr.write(
+            f"target error: results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh: {reason}\n"
+        )
         sys.exit(2)
     return []
 
 
-# model and level as the schema spells them (not only the configured ones): refuse_unmakeable names the reason
-wildcard_constraints:
-    model="[1-9][0-9]*",
-    level="[A-Za-z][A-Za-z0-9_]*",
-    symmetry="full|half|quarter|axisymmetric",
-    fidelity="fully_coupled|one_way",
+def run_config_file(model):
+    """The configuration file of a model's solves: config.run_sections as JSON, written by rule solve_config."""
+    return f"results/configs/model{model}.json"
+
+
+def mpi_solve(fidelity, symmetry):
+    """Whether a solve may run on several MPI ranks: the fully coupled rung in 3D (the one-way rung and
+    the r-z runs are serial)."""
+    return fidelity == "fully_coupled" and symmetry != "axisymmetric"
+
+
+def solve_mpi(w):
+    """Resource mpi of a solve: the local launcher for an MPI-capable solve, none (a serial job) otherwise."""
+    return "mpiexec" if mpi_solve(w.fidelity, w.symmetry) else None
+
+
+def launcher(fidelity, symmetry, resources):
+    """The interpreter of `-m ureterfsi.study`, behind `{resources.mpi} -n {resources.tasks}` when an
+    MPI-capable solve has more than one task."""
+    tasks = int(resources.get("tasks", 1))
+    if tasks > 1 and mpi_solve(fidelity, symmetry):
+        return f"{resources.mpi} -n {tasks} {sys.executable}"
+    return sys.executable
+
+
+def solve_launcher(wildcards, resources):
+    """launcher() of a study solve (a function of resources: Snakemake keeps it out of the rerun triggers)."""
+    return launcher(wildcards.fidelity, wildcards.symmetry, resources)
+
+
+def ladder_launcher(wildcards, resources):
+    """launcher() of a ladder rung (config ladder.rungs)."""
+    rung = config["ladder"]["rungs"][wildcards.rung]
+    return launcher(rung["fidelity"], rung["symmetry"], resources)
+
+
+def solve_inputs(w):
+    """The mesh and the configuration file, and for the one-way rung the shared wall motion."""
+    inputs = {
+        "mesh": f"results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh",
+        "config": run_config_file(w.model),
+    }
+    if w.fidelity == "one_way":
+        inputs["wall"] = WALL_MOTION
+    return inputs
+
+
+def solve_wall(wildcards, input):
+    """--wall of a one-way solve (the shared wall motion); nothing for the fully coupled rung."""
+    return f"--wall {input.wall}" if "wall" in input.keys() else ""
+
+
+def convergence_only_end(w):
+    """Runs that only the mesh-convergence study needs (its model on a level other than study.level) stop at
+    study.convergence_time: Fig. 3 and the GCI look no further (the scene models only what it needs).
+    """
+    if w.level != STUDY_LEVEL and w.model == CONVERGENCE_MODEL:
+        return f"--end {config['study']['convergence_time']}"
+    return ""
+
+
+def stability_mesh(w):
+    """The r-z mesh of the case's level (case_setup names a level missing from mesh.levels); none for a
+    hole_elements case, whose mesh sizes are its own (built in the case)."""
+    s = case_setup(config, case_by_name(config, w.case))
+    if s["scene"] == "holes":
+        return []
+    return f"results/meshes/axisymmetric/model{s['model']}_{s['level']}.msh"
+
+
+def stability_memory(w):
+    """MiB a case reserves: that of a study solve of its scene (solve_mem_mb): r-z fully coupled, or 3D one-way
+    at the case's level and symmetry."""
+    s = case_setup(config, case_by_name(config, w.case))
+    if s["scene"] == "holes":
+        return solve_mem_mb("one_way", s["symmetry"], s["level"])
+    return solve_mem_mb("fully_coupled", "axisymmetric", s["level"])
+
+
+def stability_inputs(w):
+    """The configuration entering one case (a change re-runs that case; plotting options do not)."""
+    case = case_by_name(config, w.case)
+    keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "solver")
+    st = {k: v for k, v in config["stability"].items() if k != "axes"}
+    s = case_setup(config, case)
+    mesh = {"mesh": s["cfg"]["mesh"]} if s["scene"] == "holes" else {}
+    return json.dumps(
+        {k: config[k] for k in keys}
+        | mesh
+        | {
+            "stability": st,
+            "axis": case.axis,
+            "value": case.value,
+            "model": config["models"][s["model"]],
+        },
+        sort_keys=True,
+    )
+
+
+def design_figures(study):
+    """The figure files of a design study: parameters, and sensitivity for sampled studies."""
+    kinds = ["parameters"] + (
+        ["sensitivity"] if DESIGNS[study].kind in ("sobol", "latin_hypercube") else []
+    )
+    return [
+        f"results/figures/designs/{study}_{k}.{ext}"
+        for k in kinds
+        for ext in FIGURE_FORMATS
+    ]
+
+
+def design_mesh_inputs(w):
+    """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
+    st, p = DESIGN_MESHES[w.mesh_id]
+    return json.dumps(
+        ureter_designs.mesh_sections(p.config, st.model, st.level, st.symmetry),
+        sort_keys=True,
+    )
+
+
+def design_solve_inputs(w):
+    """The point's mesh, and on the one-way rung its wall motion."""
+    p = DESIGNS[w.design_study].point(w.point)
+    out = {"mesh": f"results/designs/meshes/{p.mesh_id}.msh"}
+    if p.wall_id:
+        out["wall"] = f"results/designs/wall_motion/{p.wall_id}.nc"
+    return out
+
+
+def design_solve_study(w):
+    """The configuration entering a design point's solve, with its rung and symmetry (rerun trigger)."""
+    st = DESIGNS[w.design_study]
+    sections = ureter_designs.solve_sections(st.point(w.point).config, st.model)
+    return json.dumps(
+        sections | {"rung": st.rung, "symmetry": st.symmetry}, sort_keys=True
+    )
+
+
+def design_solve_mem_mb(w):
+    """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
+    st = DESIGNS[w.design_study]
+    return solve_mem_mb(st.rung, st.symmetry, st.level)

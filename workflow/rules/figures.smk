@@ -2,28 +2,20 @@
 # Every rule's params carry only the plotting options (config `figures`), so changing one re-runs the
 # plotting, not the solves or the aggregation. One script draws every figure, chosen by the rule name.
 
-FIGURE_OPTIONS = config["figures"]
-FIGURE_FORMATS = list(FIGURE_OPTIONS["formats"])
-# the report shows one file per figure: the raster format when there is one
-REPORT_FORMAT = "png" if "png" in FIGURE_FORMATS else FIGURE_FORMATS[0]
 # paper Fig. 2: model 3 (10 mm between hole pairs), the convergence model, unless figures.domain_model says otherwise
-FIGURE2_MODEL = str(FIGURE_OPTIONS.get("domain_model", config["study"]["convergence_model"]))
+FIGURE2_MODEL = str(
+    FIGURE_OPTIONS.get("domain_model", config["study"]["convergence_model"])
+)
 # instants of Fig. 5 and of Figs. 6-9 (config figures.wave_times, figures.hole_velocity_times; paper §3.4-3.5)
 WAVE_TIMES = [float(t) for t in FIGURE_OPTIONS["wave_times"]]
-HOLE_TIMES = dict(zip(("fig06", "fig07", "fig08", "fig09"), (float(t) for t in FIGURE_OPTIONS["hole_velocity_times"])))
+HOLE_TIMES = dict(
+    zip(
+        ("fig06", "fig07", "fig08", "fig09"),
+        (float(t) for t in FIGURE_OPTIONS["hole_velocity_times"]),
+    )
+)
 MODELS_DATASET = f"results/datasets/models_{STUDY_LEVEL}.nc"
 CONVERGENCE_DATASET = "results/datasets/mesh_convergence.nc"
-
-
-def figure_outputs(stem):
-    """results/figures/<stem>.<ext> for every configured format; the report format is marked for the report."""
-    out = []
-    for ext in FIGURE_FORMATS:
-        path = f"results/figures/{stem}.{ext}"
-        if ext == REPORT_FORMAT:
-            path = report(path, caption=f"../report/{stem}.rst", category="Paper figures")
-        out.append(path)
-    return out
 
 
 rule fig02_domain:
@@ -32,11 +24,11 @@ rule fig02_domain:
         json=mesh_sidecar(FIGURE2_MODEL, STUDY_LEVEL),
     output:
         figure_outputs("fig02_domain"),
+    log:
+        "results/logs/figures/fig02_domain.log",
     params:
         figures=FIGURE_OPTIONS,
         model=FIGURE2_MODEL,
-    log:
-        "results/logs/figures/fig02_domain.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -46,10 +38,10 @@ rule fig03_mesh_convergence:
         conv=CONVERGENCE_DATASET,
     output:
         figure_outputs("fig03_mesh_convergence"),
-    params:
-        figures=FIGURE_OPTIONS,
     log:
         "results/logs/figures/fig03_mesh_convergence.log",
+    params:
+        figures=FIGURE_OPTIONS,
     script:
         "../scripts/plot_figure.py"
 
@@ -59,10 +51,10 @@ rule fig04_outlet_flow:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig04_outlet_flow"),
-    params:
-        figures=FIGURE_OPTIONS,
     log:
         "results/logs/figures/fig04_outlet_flow.log",
+    params:
+        figures=FIGURE_OPTIONS,
     script:
         "../scripts/plot_figure.py"
 
@@ -72,11 +64,11 @@ rule fig05_wall_displacement:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig05_wall_displacement"),
+    log:
+        "results/logs/figures/fig05_wall_displacement.log",
     params:
         figures=FIGURE_OPTIONS,
         times=WAVE_TIMES,
-    log:
-        "results/logs/figures/fig05_wall_displacement.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -86,11 +78,11 @@ rule fig06_hole_velocity:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig06_hole_velocity"),
+    log:
+        "results/logs/figures/fig06_hole_velocity.log",
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig06"],
-    log:
-        "results/logs/figures/fig06_hole_velocity.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -100,11 +92,11 @@ rule fig07_hole_velocity:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig07_hole_velocity"),
+    log:
+        "results/logs/figures/fig07_hole_velocity.log",
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig07"],
-    log:
-        "results/logs/figures/fig07_hole_velocity.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -114,11 +106,11 @@ rule fig08_hole_velocity:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig08_hole_velocity"),
+    log:
+        "results/logs/figures/fig08_hole_velocity.log",
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig08"],
-    log:
-        "results/logs/figures/fig08_hole_velocity.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -128,11 +120,11 @@ rule fig09_hole_velocity:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig09_hole_velocity"),
+    log:
+        "results/logs/figures/fig09_hole_velocity.log",
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig09"],
-    log:
-        "results/logs/figures/fig09_hole_velocity.log",
     script:
         "../scripts/plot_figure.py"
 
@@ -142,10 +134,10 @@ rule fig10_stent_von_mises:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig10_stent_von_mises"),
-    params:
-        figures=FIGURE_OPTIONS,
     log:
         "results/logs/figures/fig10_stent_von_mises.log",
+    params:
+        figures=FIGURE_OPTIONS,
     script:
         "../scripts/plot_figure.py"
 
@@ -155,10 +147,10 @@ rule fig11_hole_flux:
         models=MODELS_DATASET,
     output:
         figure_outputs("fig11_hole_flux"),
-    params:
-        figures=FIGURE_OPTIONS,
     log:
         "results/logs/figures/fig11_hole_flux.log",
+    params:
+        figures=FIGURE_OPTIONS,
     script:
         "../scripts/plot_figure.py"
 
@@ -168,11 +160,15 @@ rule table1:
         sidecars=[mesh_sidecar(m, STUDY_LEVEL) for m in MODELS],
     output:
         csv="results/figures/table1.csv",
-        md=report("results/figures/table1.md", caption="../report/table1.rst", category="Paper figures"),
-    params:
-        models={m: config["models"][m] for m in MODELS},
+        md=report(
+            "results/figures/table1.md",
+            caption="../report/table1.rst",
+            category="Paper figures",
+        ),
     log:
         "results/logs/figures/table1.log",
+    params:
+        models={m: config["models"][m] for m in MODELS},
     script:
         "../scripts/plot_figure.py"
 
@@ -183,7 +179,11 @@ rule table_gci:
         gci=rules.gci.output[0],
     output:
         csv="results/figures/table_gci.csv",
-        md=report("results/figures/table_gci.md", caption="../report/table_gci.rst", category="Paper figures"),
+        md=report(
+            "results/figures/table_gci.md",
+            caption="../report/table_gci.rst",
+            category="Paper figures",
+        ),
     log:
         "results/logs/figures/table_gci.log",
     script:
@@ -203,4 +203,4 @@ rule all_figures:
         rules.fig10_stent_von_mises.output,
         rules.fig11_hole_flux.output,
         rules.table1.output,
-        *(rules.table_gci.output if len(LEVELS) >= 3 else []),   # the GCI needs three mesh levels
+        *(rules.table_gci.output if len(LEVELS) >= 3 else []),  # the GCI needs three mesh levels

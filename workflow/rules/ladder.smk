@@ -14,44 +14,53 @@ if LADDER:
     rule ladder_run:
         input:
             mesh=lambda w: "results/meshes/{symmetry}/model{model}_{level}.msh".format(
-                model=LADDER["model"], **LADDER_RUNGS[w.rung]),
+                model=LADDER["model"], **LADDER_RUNGS[w.rung]
+            ),
+            config=run_config_file(LADDER["model"]),
         output:
             "results/ladder/{rung}.nc",
-        params:
-            study=lambda w: study_subset(SimpleNamespace(model=LADDER["model"])),
-            rung=lambda w: LADDER_RUNGS[w.rung],
-            end=LADDER["end"],
         log:
             "results/logs/ladder/{rung}.log",
         benchmark:
             "results/benchmarks/ladder/{rung}.tsv"
         threads: 1
         resources:
-            mem_mb=lambda w: solve_mem_mb(**{k: LADDER_RUNGS[w.rung][k] for k in ("fidelity", "symmetry", "level")}),
+            mem_mb=lambda w: solve_mem_mb(
+                **{
+                    k: LADDER_RUNGS[w.rung][k]
+                    for k in ("fidelity", "symmetry", "level")
+                }
+            ),
             runtime=24 * 60,
-        run:
-            r = params.rung
-            solve_command(config, model=LADDER["model"], level=r["level"], symmetry=r["symmetry"],
-                          fidelity=r["fidelity"], mesh=input.mesh, out=output[0], log=log[0], threads=threads,
-                          extra=f"--end {params.end} --dt {r['dt']}")
+        params:
+            rung=lambda w: LADDER_RUNGS[w.rung],
+            end=LADDER["end"],
+            model=LADDER["model"],
+            launcher=ladder_launcher,
+        shell:
+            "OPENBLAS_NUM_THREADS={threads} {params.launcher} -m ureterfsi.study"
+            " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
+            " --symmetry {params.rung[symmetry]} --fidelity {params.rung[fidelity]} --mesh {input.mesh}"
+            " --out {output} --end {params.end} --dt {params.rung[dt]} > {log} 2>&1"
 
     rule ladder:
         input:
             runs=expand("results/ladder/{rung}.nc", rung=LADDER_RUNGS),
         output:
             dataset="results/datasets/ladder.nc",
-            md=report("results/figures/table_ladder.md", caption="../report/table_ladder.rst",
-                      category="Fidelity ladder"),
-            figures=[report(f"results/figures/ladder_pareto.{ext}", caption="../report/ladder_pareto.rst",
-                            category="Fidelity ladder") if ext == REPORT_FORMAT
-                     else f"results/figures/ladder_pareto.{ext}" for ext in FIGURE_FORMATS],
+            md=report(
+                "results/figures/table_ladder.md",
+                caption="../report/table_ladder.rst",
+                category="Fidelity ladder",
+            ),
+            figures=figure_outputs("ladder_pareto", "Fidelity ladder"),
+        log:
+            "results/logs/ladder/ladder.log",
         params:
             rungs=list(LADDER_RUNGS),
             figures=FIGURE_OPTIONS,
             # the scenes' tolerances and recorded errors: a change re-runs the check (table_ladder.md)
             scenes=config["scenes"],
             ladder=config["ladder"],
-        log:
-            "results/logs/ladder/ladder.log",
         script:
             "../scripts/ladder.py"

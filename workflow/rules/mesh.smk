@@ -10,26 +10,42 @@ rule mesh:
     output:
         msh="results/meshes/{symmetry}/model{model}_{level}.msh",
         json="results/meshes/{symmetry}/model{model}_{level}.json",
-    params:
-        # rerun trigger: the configuration entering a mesh
-        inputs=lambda w: {k: config[k] for k in ("geometry", "mesh")} | {"model": config["models"][w.model]},
     log:
         "results/logs/mesh/{symmetry}/model{model}_{level}.log",
     benchmark:
         "results/benchmarks/mesh/{symmetry}/model{model}_{level}.tsv"
-    threads: 1
     priority: level_priority
+    threads: 1
+    params:
+        # rerun trigger: the configuration entering a mesh
+        inputs=lambda w: {k: config[k] for k in ("geometry", "mesh")}
+        | {"model": config["models"][w.model]},
     script:
         "../scripts/build_mesh.py"
 
 
 rule all_meshes:
     input:
-        sorted(set(
-            expand("results/meshes/{symmetry}/model{model}_{level}.{ext}",
-                   symmetry=SYMMETRY, model=MODELS, level=LEVELS, ext=("msh", "json"))
-            + expand("results/meshes/axisymmetric/model{model}_{level}.{ext}",
-                     model=AXISYMMETRIC_MODELS, level=LEVELS, ext=("msh", "json"))
-            + [f"results/meshes/{run_symmetry(m)}/model{m}_{lv}.{ext}"
-               for m in MODELS for lv in LEVELS for ext in ("msh", "json")]
-        )),
+        sorted(
+            set(
+                expand(
+                    "results/meshes/{symmetry}/model{model}_{level}.{ext}",
+                    symmetry=SYMMETRY,
+                    model=MODELS,
+                    level=LEVELS,
+                    ext=("msh", "json"),
+                )
+                + expand(
+                    "results/meshes/axisymmetric/model{model}_{level}.{ext}",
+                    model=AXISYMMETRIC_MODELS,
+                    level=LEVELS,
+                    ext=("msh", "json"),
+                )
+                + [
+                    f"results/meshes/{run_symmetry(m)}/model{m}_{lv}.{ext}"
+                    for m in MODELS
+                    for lv in LEVELS
+                    for ext in ("msh", "json")
+                ]
+            )
+        ),
