@@ -135,7 +135,7 @@ def solve_mem_mb(fidelity, symmetry, level):
 
 
 def refuse_unmakeable(w):
-    """Input function (no input) of rule mesh: a mesh the configuration cannot make, and so every run
+    """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
     on it, is refused before any job starts, in one line on stderr (an exception here would print a
     traceback)."""
     reason = unmakeable(config, w.model, w.level, w.symmetry)

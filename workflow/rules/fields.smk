@@ -13,22 +13,11 @@ FIELD_FIGURES = (
 )
 
 
-def field_figure_outputs(stem):
-    """results/figures/<stem>.<ext> for every configured format, the report format in category Fields."""
-    out = []
-    for ext in FIGURE_FORMATS:
-        path = f"results/figures/{stem}.{ext}"
-        if ext == REPORT_FORMAT:
-            path = report(path, caption=f"../report/{stem}.rst", category="Fields")
-        out.append(path)
-    return out
-
-
 rule field_hole_flow:
     input:
         run=FIELD_RUN,
     output:
-        field_figure_outputs("field_hole_flow"),
+        figure_outputs("field_hole_flow", "Fields"),
     log:
         "results/logs/figures/field_hole_flow.log",
     params:
@@ -42,7 +31,7 @@ rule field_pressure:
     input:
         run=FIELD_RUN,
     output:
-        field_figure_outputs("field_pressure"),
+        figure_outputs("field_pressure", "Fields"),
     log:
         "results/logs/figures/field_pressure.log",
     params:
