@@ -205,7 +205,8 @@ def _math(expr: str) -> int:
 
 
 def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, dim: int) -> None:
-    """Min of Threshold fields: hole walls, stent wall, ureter wall; bulk size elsewhere (§2.4.1).
+    """Min of Threshold fields: hole walls, stent wall, ureter wall (at R_i(z)), and in a stricture the narrowed gap
+    / STRICTURE_GAP_ELEMENTS; bulk size elsewhere (§2.4.1).
 
     The transition widths (h_bulk - h) / GRADING are those of size factor 1 at every level, so every
     region is refined by f and element counts grow as f^-3 (about 2.3x per level for f steps of 0.76).
