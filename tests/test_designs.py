@@ -282,3 +282,25 @@ def test_strictured_design_point_end_to_end(tmp_path):
     f = float(ds["stent_lumen_fraction"].values.ravel()[0])
     assert 0 < f < 1 and ds["stent_lumen_fraction"].attrs["units"] == "1"
     assert float(ds["stricture_fraction"].values[0]) == 0.6
+
+
+def test_radial_blend_follows_the_strictured_wall():
+    """The one-way ALE map moves a node on the narrowed wall R_i(z) with the wall and leaves the stent still."""
+    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.oneway import WallHistory, radial_blend
+
+    cfg = load_config(BASE, {"geometry": {"stricture_fraction": 0.6}})
+    g = UreterGeometry.from_config(cfg)
+    zs = np.linspace(0.0, g.length, 101)
+    t = np.array([0.0, 1.0])
+    ur, uz = np.outer(t, 1e-4 * np.sin(zs / g.length * np.pi)), np.outer(t, 2e-5 * np.ones_like(zs))
+    hist = WallHistory(t, zs, ur, uz, ur, uz, zs, ur)
+    blend = radial_blend(hist, g.stent_outer_radius, g.inner_radius, False)
+    z = np.array([0.02, 0.025, 0.03])
+    theta = np.array([0.1, 0.7, 1.3])
+    for r, expected in ((g.inner_radius(z), 1.0), (np.full(3, g.stent_outer_radius), 0.0)):
+        x = np.vstack([r * np.cos(theta), r * np.sin(theta), z])
+        d = blend(x, 1.0)
+        wall_ur, wall_uz = hist.inner_displacement(z, 1.0)
+        assert np.allclose(np.hypot(d[0], d[1]), expected * wall_ur, rtol=1e-12, atol=1e-18)
+        assert np.allclose(d[2], expected * wall_uz, rtol=1e-12, atol=1e-18)
