@@ -64,6 +64,8 @@ class _SyntheticProbes:
             self.series["stent_max_von_mises_z"] = list(np.clip(zc, 0, g.length))
             self.series["hole_flux"] = [[1e-10 * np.sin(2 * np.pi * (ti - zk / 0.02) / 3) for zk, _ in self.holes]
                                         for ti in t]
+            for end in ("outlet", "inlet"):
+                self.series[f"{end}_lumen_flux"] = list(1e-2 * np.asarray(self.series[f"{end}_flux"]))
             a = g.hole_radius
             self.snapshots["stent_von_mises_line"] = [
                 (VM_BASE * level_factor * (1 + 0.3 * np.exp(-0.5 * ((self.z - 0.02 * pt) / 5e-3) ** 2))).tolist()

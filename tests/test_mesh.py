@@ -199,3 +199,90 @@ def test_invalid_hole_layout_raises(cfg, tmp_path, key, value, match):
     bad["models"]["2"][key] = value
     with pytest.raises(ValueError, match=match):
         build_mesh(bad, "2", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
+
+
+# ------------------------------------------------------------------------------------------ stricture (issue 13)
+# the 10 mm segment's coarse meshes as built before the stricture existed (commit 2eb6a24): cells, nodes and the
+# first 16 hex digits of the .msh file's SHA-256
+UNSTRICTURED = {("3", "quarter"): (13722, 3079, "0b217fb0b7592e08"),
+                ("1", "axisymmetric"): (242, 144, "2236c70b11c37d54")}
+
+
+@pytest.fixture(scope="module")
+def mini():
+    from ureterfsi.config import load_config_files
+
+    return load_config_files(["config/config.yaml", "tests/data/mini-ureter.yaml"])
+
+
+@pytest.mark.parametrize("model,symmetry", sorted(UNSTRICTURED))
+def test_zero_stricture_gives_todays_mesh(mini, tmp_path, model, symmetry):
+    """A zero fraction is no stricture, whatever its length and position: the mesh is today's, node for node."""
+    cfg = load_config(mini, {"geometry": {"stricture_fraction": 0.0, "stricture_length": 0.002,
+                                          "stricture_position": 0.003}})
+    info = build_mesh(cfg, model, "coarse", symmetry, tmp_path / "m.msh", tmp_path / "m.json")
+    digest = hashlib.sha256((tmp_path / "m.msh").read_bytes()).hexdigest()[:16]
+    assert (info["cells_total"], info["nodes"], digest) == UNSTRICTURED[model, symmetry]
+
+
+def _interface_nodes(msh, tag: int, dim: int) -> np.ndarray:
+    """(r, z) of the nodes of a facet group (r-z section: r = x, z = y)."""
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.merge(str(msh))
+        _, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(dim - 1, tag)
+    finally:
+        gmsh.finalize()
+    x = np.asarray(xyz).reshape(-1, 3)
+    return np.c_[x[:, 0], x[:, 1]] if dim == 2 else np.c_[np.hypot(x[:, 0], x[:, 1]), x[:, 2]]
+
+
+@pytest.mark.parametrize("model,symmetry,fraction", [("1", "axisymmetric", 0.6), ("3", "quarter", 0.7)])
+def test_strictured_mesh(mini, tmp_path, model, symmetry, fraction):
+    """Wall nodes on R_i(z) (lumen) and R_o(z) (outer surface, constant thickness), the narrowest radius
+    exact at the centre, subdomain measures as the profile integrals give, every facet tagged once."""
+    cfg = load_config(mini, {"geometry": {"stricture_fraction": fraction, "stricture_length": 0.004,
+                                          "stricture_position": 0.005}})
+    geom, dim = UreterGeometry.from_config(cfg), 2 if symmetry == "axisymmetric" else 3
+    info = build_mesh(cfg, model, "coarse", symmetry, tmp_path / "m.msh", tmp_path / "m.json")
+    for tag, radius in ((tags.FLUID_URETER, geom.inner_radius), (tags.URETER_OUTER, geom.outer_radius)):
+        rz = _interface_nodes(tmp_path / "m.msh", tag, dim)
+        assert np.abs(rz[:, 0] - radius(rz[:, 1])).max() < 1e-3 * geom.ureter_inner_radius, tags.FACET_NAMES[tag]
+    rz = _interface_nodes(tmp_path / "m.msh", tags.FLUID_URETER, dim)
+    assert rz[:, 0].min() == pytest.approx((1 - fraction) * geom.ureter_inner_radius, rel=1e-9)
+    assert rz[np.argmin(rz[:, 0]), 1] == pytest.approx(0.005, abs=1e-9)
+    for name, m in info["subdomain_measure"].items():
+        assert abs(m["rel_error"]) < 5e-3, (name, m)
+    assert info["quality_minSICN"]["min"] > 0.1
+    if model != "1":
+        assert info["hole_channels_found"] == 2
+    mesh, ct, ft = load_mesh(tmp_path / "m.msh", MPI.COMM_WORLD)
+    assert np.unique(ft.indices).size == ft.indices.size == sum(info["facet_tags"].values())
+    expected = EXPECTED_FACETS[symmetry] - ({tags.STENT_ENDS, tags.FLUID_STENT} if model == "1" else set())
+    assert set(ft.values.tolist()) == expected
+
+
+def test_strictured_wall_model(mini):
+    """The r-z wall scene has the same profile: both surfaces moved inward by R_i f b(z), every surface facet
+    tagged."""
+    from dolfinx.mesh import compute_midpoints
+
+    from ureterfsi.calibration import INNER, OUTER, WallModel
+
+    cfg = load_config(mini, {"geometry": {"stricture_fraction": 0.5, "stricture_length": 0.004,
+                                          "stricture_position": 0.005}})
+    geom, wall = UreterGeometry.from_config(cfg), WallModel(cfg, nr=4)
+    x = wall.problem.mesh.geometry.x
+    ft = wall.scene.facet_tags
+    assert ft.find(INNER).size == ft.find(OUTER).size == wall.nz
+    mesh = wall.problem.mesh
+    mesh.topology.create_connectivity(1, 0)
+    f2v = mesh.topology.connectivity(1, 0)
+    for tag, radius in ((INNER, geom.inner_radius), (OUTER, geom.outer_radius)):
+        verts = np.unique(np.concatenate([f2v.links(f) for f in ft.find(tag)]))
+        xv = compute_midpoints(mesh, 0, verts.astype(np.int32))
+        assert verts.size == wall.nz + 1 and np.abs(xv[:, 0] - radius(xv[:, 1])).max() < 1e-12
+    assert x[:, 0].min() == pytest.approx(geom.narrowest_radius, rel=1e-12)

@@ -35,6 +35,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ureterfsi.geometry import Stricture
+
 log = logging.getLogger("ureterfsi.calibration")
 
 # facet / cell tags of the r-z wall scene
@@ -146,6 +148,9 @@ class WallModel:
         ft = tag_facets(mesh, {INNER: lambda x: np.isclose(x[0], Ri, atol=tol),
                                OUTER: lambda x: np.isclose(x[0], Ro, atol=tol),
                                ENDS: lambda x: np.isclose(x[1], 0.0, atol=tol) | np.isclose(x[1], L, atol=tol)})
+        self.stricture = Stricture.from_geometry(cfg["geometry"])
+        if self.stricture.fraction > 0:  # tagged straight, then both surfaces moved inward by R_i f b(z)
+            mesh.geometry.x[:, 0] += self.stricture.shift(mesh.geometry.x[:, 1], Ri)
 
         self.load_scale = fem.Constant(mesh, 1.0)
         self.coefficient_scale = fem.Constant(mesh, 1.0)
@@ -188,14 +193,19 @@ class WallModel:
         # outer / inner surface nodes of the displacement space (P2: vertices and edge midpoints)
         self._V, self._map = self.problem.sub("displacement").collapse()
         xyz = self._V.tabulate_dof_coordinates()
-        nloc = self._V.dofmap.index_map.size_local
-        self._outer = np.flatnonzero(np.isclose(xyz[:nloc, 0], Ro, atol=tol))
-        self._inner = np.flatnonzero(np.isclose(xyz[:nloc, 0], Ri, atol=tol))
+        self._outer, self._inner = self.surface_dofs(self._V, OUTER), self.surface_dofs(self._V, INNER)
         self._z = xyz[:, 1]
         self.comm = mesh.comm
         self.newton_iterations = 0
         # (load scale, coefficient scale, pulse centre) of the current, converged state (x = 0: no load)
         self.state_params = (0.0, 1.0, 0.5 * L)
+
+    def surface_dofs(self, V, facet_tag: int) -> np.ndarray:
+        """Owned dofs of a (collapsed) space of this scene on the INNER or OUTER facets, ascending."""
+        from dolfinx import fem
+
+        dofs = fem.locate_dofs_topological(V, 1, self.scene.facet_tags.find(facet_tag))
+        return np.unique(dofs[dofs < V.dofmap.index_map.size_local])
 
     # -------------------------------------------------------------------------------------------
     def mesh_info(self) -> dict:

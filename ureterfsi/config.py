@@ -276,6 +276,30 @@ def check_hole_end_clearance(cfg):
                           f"this span must exceed the hole diameter {_fmt(g['hole_diameter'])} m, got c = {_fmt(c)}")
 
 
+# ---- stricture (issue 13, ureterfsi.geometry.Stricture)
+
+def check_stricture(cfg):
+    """A stricture (fraction > 0) lies inside the segment and keeps the narrowest gap (stent to wall, or the lumen
+    radius without a stent) >= geometry.stricture_min_gap of the unobstructed one."""
+    g, geo = cfg["geometry"], _geom(cfg)
+    if not geo.strictured:
+        return
+    st, L = geo.stricture, g["length"]
+    if not (st.position - 0.5 * st.length >= 0.0 and st.position + 0.5 * st.length <= L):
+        raise ConfigError("geometry.stricture_position",
+                          f"the stricture [{_fmt(st.position - 0.5 * st.length)}, {_fmt(st.position + 0.5 * st.length)}] m "
+                          f"(stricture_position -+ stricture_length/2) must lie inside the segment [0, {_fmt(L)}] m")
+    stented = any(m["stent"] for m in cfg["models"].values())
+    r_stent = geo.stent_outer_radius if stented else 0.0
+    gap, open_gap = geo.narrowest_radius - r_stent, geo.ureter_inner_radius - r_stent
+    if not gap >= g["stricture_min_gap"] * open_gap * (1 - RTOL):
+        what = "stent outer radius" if stented else "axis"
+        raise ConfigError("geometry.stricture_fraction",
+                          f"{_fmt(st.fraction)} narrows the lumen to radius {_fmt(geo.narrowest_radius)} m, a gap of "
+                          f"{_fmt(gap)} m to the {what}; need >= geometry.stricture_min_gap {_fmt(g['stricture_min_gap'])}"
+                          f" x the unobstructed {_fmt(open_gap)} m (no contact)")
+
+
 def check_model_keys(cfg):
     keys = sorted(cfg["models"], key=int)
     want = [str(i) for i in range(1, len(keys) + 1)]
@@ -561,7 +585,7 @@ def check_stability(cfg):
 
 CHECKS = (
     check_plausible,
-    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
     check_runs, check_ladder, check_figures, check_stability,
@@ -605,7 +629,8 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
 
 
 # the geometry the r-z wall solve reads (ureterfsi.calibration.WallModel): the stent and its holes do not enter
-WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness")
+WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
+                 "stricture_position")
 
 
 RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")

@@ -11,11 +11,12 @@ impossible design is refused before any job starts, in one line naming the param
 What a point recomputes follows from content-addressed identities: the mesh (``mesh_id``: geometry, mesh
 sizes, model row, level, symmetry) and, on the one-way rung, the r-z wall motion (``wall_id``:
 ``ureterfsi.config.wall_sections``). A stent or hole change gives a new mesh and urine solve on the shared
-wall motion; a wall or load change gives one wall motion per distinct wall, shared by every stent on it.
+wall motion; a wall or load change gives one wall motion per distinct wall, shared by every stent on it; a
+stricture (the obstruction, ``geometry.stricture_*``) changes both the wall and the mesh.
 
 Results (``study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
-through each side hole, the share of the outlet flow exchanged through the holes, peak stent von Mises
-stress, peak wall displacement) and the time series behind them, on one dimension per parameter for a full
+through each side hole, the share of the outlet flow exchanged through the holes, the share of the outlet flow
+inside the stent lumen, peak stent von Mises stress, peak wall displacement) and the time series behind them, on one dimension per parameter for a full
 factorial grid, else on a ``design`` dimension with the parameters as coordinates.
 """
 from __future__ import annotations
@@ -55,7 +56,12 @@ PARAMETERS = {
     "wall_stiffness_scale": Parameter("1", "common factor on the five Mooney-Rivlin coefficients of the wall", "wall"),
     "peak_traction": Parameter("Pa", "peak traction of the peristaltic load", "wall"),
     "pulse_speed": Parameter("m s-1", "speed of the peristaltic pulse", "wall"),
+    # the obstruction (geometry.stricture_*): a new wall motion and a new mesh
+    "stricture_fraction": Parameter("1", "fraction by which a stricture narrows the lumen radius at its centre", "wall"),
+    "stricture_length": Parameter("m", "axial length of the stricture", "wall"),
+    "stricture_position": Parameter("m", "axial position of the stricture centre", "wall"),
 }
+STRICTURE = ("stricture_fraction", "stricture_length", "stricture_position")
 NOT_YET_SUPPORTED = {
     "hole_pair_rotation": "rotated hole pairs break the quarter symmetry; the full or a sector mesh is not built yet",
     "stent_eccentricity": "an eccentric stent breaks the quarter symmetry; the half mesh of an offset stent is not "
@@ -72,6 +78,9 @@ CONFIG_KEYS = {
     "wall_stiffness_scale": ("ureter.",),
     "peak_traction": ("peristalsis.",),
     "pulse_speed": ("peristalsis.",),
+    "stricture_fraction": ("geometry.stricture_fraction",),
+    "stricture_length": ("geometry.stricture_position", "geometry.stricture_fraction"),
+    "stricture_position": ("geometry.stricture_position",),
 }
 
 
@@ -131,7 +140,8 @@ def base_values(cfg: dict, model: str) -> dict:
             "stent_outer_diameter": g["stent_inner_diameter"] + 2 * g["stent_wall_thickness"],
             "stent_wall_thickness": g["stent_wall_thickness"],
             "stent_youngs_modulus": cfg["stent"]["youngs_modulus"], "wall_stiffness_scale": 1.0,
-            "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"]}
+            "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"]} | {
+            p: g[p] for p in STRICTURE}
 
 
 def apply(cfg: dict, model: str, values: dict) -> dict:
@@ -161,6 +171,7 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
         out["peristalsis"]["peak_traction"] = values["peak_traction"]
     if "pulse_speed" in values:
         out["peristalsis"]["speed"] = values["pulse_speed"]
+    g.update({p: values[p] for p in STRICTURE if p in values})
     return out
 
 
@@ -279,7 +290,8 @@ def _blame(values: dict, err: ConfigError) -> str:
 
 
 def _values_text(values: dict) -> str:
-    return ", ".join(f"{p} = {_fmt(v)} {PARAMETERS[p].units}" for p, v in values.items())
+    return ", ".join(f"{p} = {_fmt(v)}" + ("" if PARAMETERS[p].units == "1" else f" {PARAMETERS[p].units}")
+                     for p, v in values.items())
 
 
 def expand_study(cfg: dict, name: str) -> Study:
@@ -370,8 +382,9 @@ def solve_point(cfg: dict, study: Study, point: Point, mesh: str, out: str, chec
 
 # ------------------------------------------------------------------------------------------ dataset
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
-           "hole_exchange_fraction", "peak_stent_von_mises", "peak_wall_displacement", "wall_time")
-SERIES = ("outlet_flux", "inlet_flux", "stent_max_von_mises", "max_wall_displacement")
+           "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
+           "wall_time")
+SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement")
 
 
 def _trapz(y: np.ndarray, t: np.ndarray) -> float:
@@ -386,11 +399,18 @@ def point_scalars(run) -> dict:
     # the quarter model records the +y hole of each pair; the -y hole carries the same flow by symmetry
     mirror = 2.0 if hole.shape[1] and np.all(run["hole_side"].values > 0) else 1.0
     exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
+    if "outlet_lumen_flux" in run:
+        lumen = run["outlet_lumen_flux"].values.astype(float)
+        inside, outside = _trapz(np.abs(lumen), t), _trapz(np.abs(q - lumen), t)
+        lumen_fraction = inside / (inside + outside) if inside + outside > 0 else np.nan
+    else:
+        lumen_fraction = np.nan
     return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
             "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
             "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
             "hole_exchange_fraction": mirror * exchange.sum() / _trapz(np.abs(q), t),
+            "stent_lumen_fraction": lumen_fraction,
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
             "wall_time": float(run.attrs.get("wall_time_s", np.nan))}
@@ -445,9 +465,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     ds.attrs.update(provenance_attrs(cfg, study=name, design_kind=st.kind, model=st.model, mesh_level=st.level,
                                      rung=st.rung, symmetry=st.symmetry, base_values=st.base,
                                      points={p.id: p.values for p in st.points},
-                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points},
-                                     stent_lumen_fraction="not computed: the run files record the outlet flow of the "
-                                                          "whole cross-section only (no stent-lumen probe)"))
+                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points}))
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi design study {name}: model {st.model}, {st.kind}, {len(st.points)} points"
     return ds

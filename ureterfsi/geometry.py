@@ -1,7 +1,8 @@
 """Geometry of the ureter segment, the stent and its side holes (paper §2.1, Table 1).
 
 All lengths in metres. The ureter axis is z, inlet (kidney) at z = 0, outlet (bladder) at z = L.
-Side holes are radial, in diametrically opposite pairs on the y axis.
+Side holes are radial, in diametrically opposite pairs on the y axis. An optional axisymmetric stricture
+(issue 13) narrows the lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`).
 """
 from __future__ import annotations
 
@@ -9,6 +10,28 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+
+@dataclass(frozen=True)
+class Stricture:
+    """Axisymmetric narrowing of the lumen (config geometry.stricture_*): radius reduced by `fraction` at the
+    axial centre `position`, over `length`."""
+    fraction: float
+    length: float
+    position: float
+
+    @classmethod
+    def from_geometry(cls, g: dict) -> "Stricture":
+        return cls(g["stricture_fraction"], g["stricture_length"], g["stricture_position"])
+
+    def bump(self, z):
+        """b(z) = (1 + cos(2 pi (z - z_s) / l_s)) / 2 for |z - z_s| < l_s / 2, else 0 (C1, b(z_s) = 1)."""
+        s = np.minimum(np.abs(np.asarray(z, dtype=float) - self.position) / (0.5 * self.length), 1.0)
+        return 0.5 * (1.0 + np.cos(math.pi * s))
+
+    def shift(self, z, inner_radius: float):
+        """Inward displacement of the wall surfaces, -R_i f b(z) (constant wall thickness)."""
+        return -inner_radius * self.fraction * self.bump(z)
 
 
 @dataclass(frozen=True)
@@ -20,6 +43,7 @@ class UreterGeometry:
     stent_inner_radius: float
     hole_radius: float
     hole_end_clearance: float
+    stricture: Stricture | None = None
 
     @classmethod
     def from_config(cls, cfg: dict) -> "UreterGeometry":
@@ -34,7 +58,32 @@ class UreterGeometry:
             stent_inner_radius=si,
             hole_radius=0.5 * g["hole_diameter"],
             hole_end_clearance=g["hole_end_clearance"],
+            stricture=Stricture.from_geometry(g),
         )
+
+    @property
+    def strictured(self) -> bool:
+        return self.stricture is not None and self.stricture.fraction > 0.0
+
+    def radial_shift(self, z):
+        """-R_i f b(z): how far the strictured wall (both surfaces) lies inward of the straight one at z."""
+        z = np.asarray(z, dtype=float)
+        if not self.strictured:
+            return np.zeros_like(z)
+        return self.stricture.shift(z, self.ureter_inner_radius)
+
+    def inner_radius(self, z):
+        """Lumen radius R_i(z) = R_i (1 - f b(z)) (Stricture.bump)."""
+        return self.ureter_inner_radius + self.radial_shift(z)
+
+    def outer_radius(self, z):
+        """Outer wall radius R_o(z) = R_o - R_i f b(z): the wall keeps its thickness."""
+        return self.ureter_outer_radius + self.radial_shift(z)
+
+    @property
+    def narrowest_radius(self) -> float:
+        """Lumen radius at the stricture centre, R_i (1 - f)."""
+        return self.ureter_inner_radius * (1.0 - (self.stricture.fraction if self.strictured else 0.0))
 
     @property
     def probe_radius(self) -> float:
@@ -98,11 +147,31 @@ def hole_channel_volume(geom: UreterGeometry) -> float:
     return float(np.sum(w * integrand * a * np.cos(theta)) * 0.5 * math.pi)
 
 
+def _axial_integral(geom: UreterGeometry, f) -> float:
+    """int_0^L f(z) dz: exact for a constant f, Gauss-Legendre on each smooth piece of a strictured f."""
+    if not geom.strictured:
+        return float(f(np.zeros(1))[0]) * geom.length
+    st = geom.stricture
+    a, b = max(st.position - 0.5 * st.length, 0.0), min(st.position + 0.5 * st.length, geom.length)
+    t, w = np.polynomial.legendre.leggauss(64)
+    total = 0.0
+    for lo, hi in ((0.0, a), (a, b), (b, geom.length)):
+        if hi > lo:
+            total += 0.5 * (hi - lo) * float(np.sum(w * f(lo + 0.5 * (hi - lo) * (t + 1.0))))
+    return total
+
+
+def lumen_area(geom: UreterGeometry) -> float:
+    """Area of the lumen's r-z section, int_0^L R_i(z) dz (m^2)."""
+    return _axial_integral(geom, geom.inner_radius)
+
+
 def subdomain_volumes(geom: UreterGeometry, model: StentModel, fraction: float = 1.0) -> dict:
-    """Analytic subdomain volumes (m^3) of the full model times `fraction` (1, 1/2, 1/4)."""
+    """Analytic subdomain volumes (m^3) of the full model times `fraction` (1, 1/2, 1/4):
+    lumen int pi R_i(z)^2 dz, wall int pi (R_o(z)^2 - R_i(z)^2) dz."""
     L = geom.length
-    ureter = math.pi * (geom.ureter_outer_radius**2 - geom.ureter_inner_radius**2) * L
-    lumen = math.pi * geom.ureter_inner_radius**2 * L
+    ureter = _axial_integral(geom, lambda z: math.pi * (geom.outer_radius(z)**2 - geom.inner_radius(z)**2))
+    lumen = _axial_integral(geom, lambda z: math.pi * geom.inner_radius(z)**2)
     if model.stent:
         tube = math.pi * (geom.stent_outer_radius**2 - geom.stent_inner_radius**2) * L
         holes = model.holes * hole_channel_volume(geom)

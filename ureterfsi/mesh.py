@@ -17,7 +17,7 @@ import gmsh
 import numpy as np
 
 from ureterfsi import tags
-from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions, subdomain_volumes
+from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions, lumen_area, subdomain_volumes
 from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
 from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
 
@@ -33,6 +33,12 @@ OPTIMIZE_THRESHOLD = 0.4
 # symmetric model) and of the hole cylinders about y (seam at x = -a), so no seam lies on a cut plane.
 SEAM_ANGLE_Z = 1.25 * math.pi
 SEAM_ANGLE_HOLE = -0.5 * math.pi
+# choice: the strictured wall profile is an interpolating spline through this many points of the cosine bump
+# (ureterfsi.geometry.Stricture.bump), one of them at its centre, so the narrowest radius is exact.
+STRICTURE_SPLINE_POINTS = 41
+# choice: the fluid element size in a stricture is at most the local gap / this many (at size factor 1), so the
+# narrowed annulus keeps elements across it (the bulk size alone leaves none in a gap of a few per cent).
+STRICTURE_GAP_ELEMENTS = 3.0
 
 
 def _request(cfg: dict, model: str, level: str, symmetry: str):
@@ -62,6 +68,40 @@ def _request(cfg: dict, model: str, level: str, symmetry: str):
     return geom, sm, z, float(cfg["mesh"]["levels"][level]["size_factor"])
 
 
+def _profile_face(geom: UreterGeometry, radius, dim: int) -> int:
+    """OCC plane surface between the axis and r = radius(z), 0 <= z <= L: in the x-z plane (dim 3, to be
+    revolved about z) or the r-z section (dim 2, r = x, z = y). Straight lines outside the stricture, over it
+    two interpolating splines (STRICTURE_SPLINE_POINTS in all) meeting at its centre, a mesh vertex."""
+    occ, L, st = gmsh.model.occ, geom.length, geom.stricture
+    point = (lambda r, z: occ.addPoint(r, 0.0, z)) if dim == 3 else (lambda r, z: occ.addPoint(r, z, 0.0))
+    a, b = st.position - 0.5 * st.length, st.position + 0.5 * st.length
+    zs = np.linspace(a, b, STRICTURE_SPLINE_POINTS)
+    spline = [point(float(radius(z)), float(z)) for z in zs]
+    p_in, p_out = point(float(radius(0.0)), 0.0), point(float(radius(L)), L)
+    axis_in, axis_out = point(0.0, 0.0), point(0.0, L)
+    curves = [occ.addLine(axis_in, p_in)]
+    if a > 0.0:
+        curves.append(occ.addLine(p_in, spline[0]))
+    else:
+        spline[0] = p_in
+    if b >= L:
+        spline[-1] = p_out
+    mid = STRICTURE_SPLINE_POINTS // 2
+    curves += [occ.addSpline(spline[:mid + 1]), occ.addSpline(spline[mid:])]
+    if b < L:
+        curves.append(occ.addLine(spline[-1], p_out))
+    curves += [occ.addLine(p_out, axis_out), occ.addLine(axis_out, axis_in)]
+    return occ.addPlaneSurface([occ.addCurveLoop(curves)])
+
+
+def _revolved(geom: UreterGeometry, radius) -> list:
+    """Solid of revolution about z of the face under r = radius(z), seam at SEAM_ANGLE_Z (as zcyl)."""
+    occ = gmsh.model.occ
+    face = _profile_face(geom, radius, 3)
+    occ.rotate([(2, face)], 0, 0, 0, 0, 0, 1, SEAM_ANGLE_Z)
+    return [d for d in occ.revolve([(2, face)], 0, 0, 0, 0, 0, 1, 2 * math.pi) if d[0] == 3]
+
+
 def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, symmetry: str) -> dict:
     """OCC solids fragmented into conforming regions; returns cell tag -> OCC volume tags."""
     occ, L = gmsh.model.occ, geom.length
@@ -79,7 +119,10 @@ def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, symmetry:
         box = occ.addBox(0, y0, -0.1 * L, big, big - y0, 1.2 * L)
         return occ.intersect(dimtags, [(3, box)])[0]
 
-    outer, lumen = keep(zcyl(geom.ureter_outer_radius)), keep(zcyl(geom.ureter_inner_radius))
+    if geom.strictured:
+        outer, lumen = keep(_revolved(geom, geom.outer_radius)), keep(_revolved(geom, geom.inner_radius))
+    else:
+        outer, lumen = keep(zcyl(geom.ureter_outer_radius)), keep(zcyl(geom.ureter_inner_radius))
     tools = [outer, lumen]
     if sm.stent:
         holes = []
@@ -113,8 +156,9 @@ def _facet_groups(regions: dict, dim: int, geom: UreterGeometry) -> dict:
     interface = {frozenset((tags.FLUID, tags.URETER)): tags.FLUID_URETER,
                  frozenset((tags.FLUID, tags.STENT)): tags.FLUID_STENT}
     groups: dict[int, list] = {}
+    box = _sampled_box if geom.strictured else gmsh.model.getBoundingBox
     for f, cells in owner.items():
-        x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(dim - 1, f)
+        x0, y0, z0, x1, y1, z1 = box(dim - 1, f)
         if dim == 2:  # r-z section: r = x, z = y
             x0, y0, z0, x1, y1, z1 = x0, None, y0, x1, None, y1
         if len(cells) == 2:
@@ -135,6 +179,15 @@ def _facet_groups(regions: dict, dim: int, geom: UreterGeometry) -> dict:
     return groups
 
 
+def _sampled_box(dim: int, entity: int) -> tuple:
+    """Bounding box of points sampled on an entity's parametrisation (9 per parameter): tight where OCC pads the
+    boxes of spline-bounded faces by ~5e-6 m (the strictured wall), more than _facet_groups' tolerance."""
+    lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(dim, entity))
+    axes = np.meshgrid(*(np.linspace(a, b, 9) for a, b in zip(lo, hi)), indexing="ij")
+    xyz = np.asarray(gmsh.model.getValue(dim, entity, np.stack([a.ravel() for a in axes], 1).ravel())).reshape(-1, 3)
+    return (*xyz.min(axis=0), *xyz.max(axis=0))
+
+
 def _threshold(in_field: int, size: float, bulk: float, dist_min: float, width: float) -> int:
     """Size `size` up to distance dist_min, growing linearly to `bulk` at dist_min + width."""
     field = gmsh.model.mesh.field
@@ -152,7 +205,8 @@ def _math(expr: str) -> int:
 
 
 def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, dim: int) -> None:
-    """Min of Threshold fields: hole walls, stent wall, ureter wall; bulk size elsewhere (§2.4.1).
+    """Min of Threshold fields: hole walls, stent wall, ureter wall (at R_i(z)), and in a stricture the narrowed gap
+    / STRICTURE_GAP_ELEMENTS; bulk size elsewhere (§2.4.1).
 
     The transition widths (h_bulk - h) / GRADING are those of size factor 1 at every level, so every
     region is refined by f and element counts grow as f^-3 (about 2.3x per level for f steps of 0.76).
@@ -161,8 +215,12 @@ def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, di
     s = {k: v * f for k, v in s1.items()}
     width = {k: (s1["fluid_bulk"] - v) / GRADING for k, v in s1.items()}
     r = "Sqrt(x^2+y^2)" if dim == 3 else "x"
-    fields = [_threshold(_math(f"{geom.ureter_inner_radius!r}-{r}"), s["ureter_wall"], s["fluid_bulk"], 0.0,
-                         width["ureter_wall"])]
+    inner = _stricture_expr(geom, "z" if dim == 3 else "y") if geom.strictured else f"{geom.ureter_inner_radius!r}"
+    fields = [_threshold(_math(f"{inner}-{r}"), s["ureter_wall"], s["fluid_bulk"], 0.0, width["ureter_wall"])]
+    if geom.strictured:  # gap / n in the fluid gap, growing by GRADING per unit distance outside it
+        rs = geom.stent_outer_radius if hole_walls else 0.0
+        out = f"(Abs({r}-{inner})+{r}-{inner})/2+(Abs({rs!r}-{r})+{rs!r}-{r})/2"
+        fields.append(_math(f"({inner}-{rs!r})*{f / STRICTURE_GAP_ELEMENTS!r}+{GRADING!r}*({out})"))
     if hole_walls:
         rm = geom.probe_radius
         half = geom.stent_outer_radius - rm
@@ -179,6 +237,14 @@ def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, di
     for name, value in (("MeshSizeExtendFromBoundary", 0), ("MeshSizeFromPoints", 0),
                         ("MeshSizeFromCurvature", 0), ("MeshSizeMax", s["fluid_bulk"])):
         gmsh.option.setNumber(f"Mesh.{name}", value)
+
+
+def _stricture_expr(geom: UreterGeometry, z: str) -> str:
+    """gmsh MathEval text of R_i(z) = R_i (1 - f (1 + cos(pi m)) / 2), m = min(|z - z_s| / (l_s / 2), 1)."""
+    st, ri = geom.stricture, geom.ureter_inner_radius
+    a = f"(Abs({z}-{st.position!r})/{0.5 * st.length!r})"
+    m = f"(({a}+1-Abs({a}-1))/2)"
+    return f"({ri!r}*(1-{st.fraction!r}*0.5*(1+Cos({math.pi!r}*{m}))))"
 
 
 def _hole_walls(stent_vols: list, geom: UreterGeometry) -> list:
@@ -282,8 +348,15 @@ def hole_channels(coords: np.ndarray, tris: np.ndarray) -> list:
 
 
 def _axisymmetric(geom: UreterGeometry) -> dict:
-    """r-z section of the stent-free model: fluid [0, Ri] x [0, L], ureter wall [Ri, Ro] x [0, L]."""
+    """r-z section of the stent-free model: fluid [0, Ri] x [0, L], ureter wall [Ri, Ro] x [0, L] (the faces under
+    R_i(z) and between R_i(z), R_o(z) when strictured)."""
     occ, L = gmsh.model.occ, geom.length
+    if geom.strictured:
+        outer, lumen = _profile_face(geom, geom.outer_radius, 2), _profile_face(geom, geom.inner_radius, 2)
+        _, pieces = occ.fragment([(2, outer)], [(2, lumen)])
+        occ.synchronize()
+        fluid = {t for _, t in pieces[1]}
+        return {tags.FLUID: sorted(fluid), tags.URETER: sorted({t for _, t in pieces[0]} - fluid)}
     fluid = occ.addRectangle(0, 0, 0, geom.ureter_inner_radius, L)
     wall = occ.addRectangle(geom.ureter_inner_radius, 0, 0, geom.ureter_outer_radius - geom.ureter_inner_radius, L)
     _, pieces = occ.fragment([(2, fluid)], [(2, wall)])
@@ -325,7 +398,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
         if dim == 3:
             analytic = subdomain_volumes(geom, sm, SYMMETRY_FRACTION[symmetry])
         else:
-            analytic = {"fluid": geom.ureter_inner_radius * geom.length,
+            analytic = {"fluid": lumen_area(geom) if geom.strictured else geom.ureter_inner_radius * geom.length,
                         "ureter": (geom.ureter_outer_radius - geom.ureter_inner_radius) * geom.length,
                         "stent": 0.0}
         measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}

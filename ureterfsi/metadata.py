@@ -37,6 +37,12 @@ VARIABLES = {
     "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
     "stent_max_von_mises_z": ("m", "z of the maximum stent von Mises stress (reference configuration)"),
     "hole_flux": ("m3 s-1", "volumetric flow rate through each side hole, positive from the stent lumen outward"),
+    "outlet_lumen_flux": ("m3 s-1", "volumetric flow rate through the outlet inside the stent lumen, positive out of "
+                                    "the ureter"),
+    "inlet_lumen_flux": ("m3 s-1", "volumetric flow rate through the inlet inside the stent lumen, positive into the "
+                                   "ureter"),
+    "stent_lumen_fraction": ("1", "share of the outlet flow passing inside the stent, integral |Q_out,lumen| dt over "
+                                  "integral |Q_out,lumen| dt + integral |Q_out - Q_out,lumen| dt"),
     "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
     "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
     "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y) across the outlet-most side hole"),

@@ -136,19 +136,20 @@ class _SurfaceRecorder(Observer):
     """Observer of the r-z wall solve: inner/outer surface displacement and velocity each step."""
 
     def __init__(self, model):
+        from .calibration import INNER, OUTER
+
         pb = model.problem
         self.pb = pb
         self.U, self.umap = pb.sub("displacement").collapse()
         self.V, self.vmap = pb.sub("velocity").collapse()
         xu, xv = self.U.tabulate_dof_coordinates(), self.V.tabulate_dof_coordinates()
-        tol = 1e-9 * model.length
 
-        def nodes(coords, r):
-            idx = np.flatnonzero(np.isclose(coords[:, 0], r, atol=tol))
+        def nodes(space, coords, facet_tag):
+            idx = model.surface_dofs(space, facet_tag)
             return idx[np.argsort(coords[idx, 1])]
 
-        self.iu, self.iv = nodes(xu, model.Ri), nodes(xv, model.Ri)
-        self.ou = nodes(xu, model.Ro)
+        self.iu, self.iv = nodes(self.U, xu, INNER), nodes(self.V, xv, INNER)
+        self.ou = nodes(self.U, xu, OUTER)
         self.z_inner, self.z_outer = xu[self.iu, 1], xu[self.ou, 1]
         assert np.allclose(self.z_inner, xv[self.iv, 1])
         self.rows = {k: [] for k in ("time", "iur", "iuz", "ivr", "ivz", "our")}
@@ -222,9 +223,10 @@ def inner_wall_motion(history: WallHistory, axisymmetric: bool):
     return (lambda x, t: field(x, t, "u")), (lambda x, t: field(x, t, "v"))
 
 
-def radial_blend(history: WallHistory, r_still: float, r_wall: float, axisymmetric: bool):
+def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: bool):
     """Algebraic ALE map of the urine domain, a callable (x, t): the inner-wall motion blended linearly in
-    radius, d(x, t) = w(r) (u_r(z, t) e_r + u_z(z, t) e_z), w = clip((r - r_still) / (r_wall - r_still), 0, 1).
+    radius, d(x, t) = w(r, z) (u_r(z, t) e_r + u_z(z, t) e_z), w = clip((r - r_still) / (r_wall(z) - r_still), 0, 1),
+    r_wall(z) the reference inner-wall radius (UreterGeometry.inner_radius: constant, or narrowed by a stricture).
 
     r_still: the radius inside which the mesh stays still (the rigid stent's outer surface; 0 without a
     stent, where w e_r = x / r_wall stays smooth on the axis). The stent lumen and the side holes do not
@@ -232,9 +234,9 @@ def radial_blend(history: WallHistory, r_still: float, r_wall: float, axisymmetr
     mirror planes (e_r lies in them) and on the clamped end faces (u = 0 there)."""
 
     def field(x, t):
-        r = x[0] if axisymmetric else np.hypot(x[0], x[1])
-        ur, uz = history.inner_displacement(x[1] if axisymmetric else x[2], t)
-        w = np.clip((r - r_still) / (r_wall - r_still), 0.0, 1.0)
+        r, z = (x[0], x[1]) if axisymmetric else (np.hypot(x[0], x[1]), x[2])
+        ur, uz = history.inner_displacement(z, t)
+        w = np.clip((r - r_still) / (r_wall(z) - r_still), 0.0, 1.0)
         if axisymmetric:
             return np.vstack([w * ur, w * uz])
         wr = w * ur / np.maximum(r, 1e-300)
@@ -260,7 +262,7 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
     if cfg["solver"]["one_way_mesh_motion"] == "algebraic":
         g = UreterGeometry.from_config(cfg)
         has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
-        blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.ureter_inner_radius,
+        blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius,
                              axisymmetric)
     scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
                                mesh_motion=blend)

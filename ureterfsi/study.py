@@ -31,7 +31,7 @@ from .fsi import physics
 from .fsi.problem import MonolithicFSI
 from .fields import coupled_parts, field_writer
 from .geometry import StentModel, UreterGeometry, hole_pair_positions
-from .probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, von_mises
+from .probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, inside_radius, von_mises
 from .metadata import cf_meta, write_netcdf
 from .provenance import provenance_attrs
 from .scenes.ureter import pulse_centre, ureter_scene
@@ -165,6 +165,10 @@ class UreterProbes(Observer):
             self.hole_s = s
             self.hole_probe = PointProbe(mesh, np.c_[np.zeros_like(s), np.full_like(s, g.probe_radius), zh + s])
             self.outlet_hole_z = zh
+            # the stent-lumen share of the end-face fluxes (R < mid-wall radius: inside the stent)
+            lumen = inside_radius(mesh, g.probe_radius)
+            self.forms["outlet_lumen_flux"] = fem.form(lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.OUTLET))
+            self.forms["inlet_lumen_flux"] = fem.form(-lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.INLET))
         self.series = {k: [] for k in self.series_names()}
         self.snapshots = {k: [] for k in self.snapshot_names()}
         self.snapshot_times = []
@@ -174,7 +178,7 @@ class UreterProbes(Observer):
                  "max_wall_displacement"]
         if self.has_stent:
             names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
-                      "stent_max_von_mises_z", "hole_flux"]
+                      "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux"]
         return names
 
     def snapshot_names(self):
@@ -194,6 +198,8 @@ class UreterProbes(Observer):
         wall = self.wall.radial_displacement(pb.time)
         s["max_wall_displacement"].append(float(np.nanmax(np.abs(wall))))
         if self.has_stent:
+            s["outlet_lumen_flux"].append(self.fraction * val["outlet_lumen_flux"])
+            s["inlet_lumen_flux"].append(self.fraction * val["inlet_lumen_flux"])
             self.stent.update(pb)
             vmax, where = self.stent.von_mises.maximum()
             s["stent_max_von_mises"].append(vmax)
