@@ -46,6 +46,18 @@ def test_same_newton_iterates_and_solution_as_the_whole_system_lu(lu_run):
     assert pb.ksp.getPC().getType() == "fieldsplit" and pb.ksp.getType() == "gmres"
 
 
+def test_inexact_newton_reaches_the_same_solution_with_fewer_krylov_iterations(lu_run):
+    """krylov_forcing "eisenstat_walker": each linear solve only as accurate as Newton's progress needs; the
+    converged state is the LU path's to the Newton tolerance."""
+    lu = lu_run[0]
+    fixed, _ = _run("block_gauss_seidel", krylov_rtol=1e-12)
+    pb, _ = _run("block_gauss_seidel", krylov_rtol=1e-12, krylov_forcing="eisenstat_walker")
+    ref = lu.x.x.array
+    assert np.abs(pb.x.x.array - ref).max() <= 1e-8 * np.abs(ref).max()
+    assert pb.counters["krylov_iterations"] < 0.7 * fixed.counters["krylov_iterations"], \
+        (pb.counters, fixed.counters)
+
+
 def test_coupling_sparsity_is_the_mixed_element_jacobian(lu_run):
     """jacobian_sparsity "couplings" (the default) stores fewer entries than the mixed element's pattern, and
     holds the same Jacobian: the same Newton history (to MUMPS's round-off on another ordering) and the same
@@ -141,7 +153,7 @@ def test_a_wrong_split_does_not_converge(lu_run):
         bgs = BlockGaussSeidel(ksp, prefix, {n: _is(pb, d) for n, d in split.items()}, 1e-8, 100, 10, {}, {})
         ksp.setFromOptions()
         x = b.duplicate()
-        bgs.solve(b, x)
+        bgs.solve(b, x, 1e-8)
         result[name] = (ksp.getConvergedReason(), ksp.getIterationNumber(), (x - exact).norm() / exact.norm())
     reason, its, err = result["right"]
     assert reason > 0 and its <= 10 and err <= 1e-6, result

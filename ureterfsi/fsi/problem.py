@@ -69,6 +69,9 @@ class SolverOptions:
     mesh_motion_rtol: float = 1e-9
     krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
     krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
+    # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
+    # Newton, each solve to eta_k in [krylov_rtol, 0.1] (MonolithicFSI._forcing)
+    krylov_forcing: str = "fixed"
     # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
     # mesh blocks at the next fresh Jacobian
     krylov_refactorise_iterations: int = 10
@@ -252,6 +255,8 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
+        if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
+            raise ValueError(f"krylov_forcing 'fixed' or 'eisenstat_walker', got {opts.krylov_forcing!r}")
         if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
             raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
         own = opts.jacobian_sparsity == "couplings"
@@ -738,6 +743,23 @@ class MonolithicFSI:
             self.invalidate_jacobian()
             raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
 
+    def _forcing(self, history, r0) -> float:
+        """Relative tolerance of the next linear solve. "eisenstat_walker" (Eisenstat & Walker 1996, choice 2,
+        gamma = 0.9, alpha = 2, with their safeguard): eta_k = 0.9 (r_k / r_k-1)^2, at least 0.9 eta_k-1^2 when
+        that exceeds 0.1, at most 0.1 (0.1 at a step's first iteration), and no smaller than needed to reach
+        Newton's tolerance from r_k (0.5 tol / r_k) nor than krylov_rtol."""
+        o = self.options
+        if o.krylov_forcing == "fixed":
+            return o.krylov_rtol
+        eta = 0.1
+        if len(history) > 1:
+            eta = 0.9 * (history[-1] / history[-2]) ** 2
+            if 0.9 * self._eta ** 2 > 0.1:
+                eta = max(eta, 0.9 * self._eta ** 2)
+        target = max(o.newton_atol, o.newton_rtol * r0)
+        self._eta = min(0.1, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
+        return self._eta
+
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
@@ -765,7 +787,7 @@ class MonolithicFSI:
                     self.coupled_solver.operator_changed()
             t0 = _time.perf_counter()
             if self.coupled_solver is not None:
-                self.coupled_solver.solve(self.b, self.dx_vec)
+                self.coupled_solver.solve(self.b, self.dx_vec, self._forcing(history, r0))
             else:
                 self.ksp.solve(self.b, self.dx_vec)
                 if "krylov_iterations" in self.counters:
