@@ -61,7 +61,8 @@ def solver_options(cfg: dict) -> SolverOptions:
                          linear_solver=s["linear_solver"],
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
                          mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
-                         krylov_rtol=s["krylov_rtol"])
+                         krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
+                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"])
 
 
 class CoupledWall:
