@@ -46,14 +46,18 @@ def test_same_newton_iterates_and_solution_as_the_whole_system_lu(lu_run):
     assert pb.ksp.getPC().getType() == "fieldsplit" and pb.ksp.getType() == "gmres"
 
 
-def test_inexact_newton_reaches_the_same_solution_with_fewer_krylov_iterations(lu_run):
-    """krylov_forcing "eisenstat_walker": each linear solve only as accurate as Newton's progress needs; the
-    converged state is the LU path's to the Newton tolerance."""
-    lu = lu_run[0]
-    fixed, _ = _run("block_gauss_seidel", krylov_rtol=1e-12)
-    pb, _ = _run("block_gauss_seidel", krylov_rtol=1e-12, krylov_forcing="eisenstat_walker")
-    ref = lu.x.x.array
-    assert np.abs(pb.x.x.array - ref).max() <= 1e-8 * np.abs(ref).max()
+def test_inexact_newton_reaches_the_same_solution_with_fewer_krylov_iterations():
+    """krylov_forcing "eisenstat_walker": each linear solve only as accurate as Newton's progress needs. At the
+    configuration's Newton tolerances every field of the converged state is the LU path's to 1e-6 of its max
+    norm (the velocity is the sensitive one: a forcing term up to 0.1 left it 3.6e-6 off)."""
+    newton = dict(newton_rtol=1e-8, newton_atol=1e-10)
+    lu, _ = _run("mumps", **newton)
+    fixed, _ = _run("block_gauss_seidel", krylov_rtol=1e-10, **newton)
+    pb, _ = _run("block_gauss_seidel", krylov_rtol=1e-10, krylov_forcing="eisenstat_walker", **newton)
+    for f in pb.field_names:
+        dofs = np.asarray(pb.sub(f).collapse()[1])
+        ref = lu.x.x.array[dofs]
+        assert np.abs(pb.x.x.array[dofs] - ref).max() <= 1e-6 * np.abs(ref).max(), f
     assert pb.counters["krylov_iterations"] < 0.7 * fixed.counters["krylov_iterations"], \
         (pb.counters, fixed.counters)
 

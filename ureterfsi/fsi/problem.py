@@ -35,6 +35,9 @@ from .scene import Scene
 log = logging.getLogger("ureterfsi.fsi")
 
 FIELDS = ("velocity", "displacement", "pressure", "solid_pressure")
+# largest Eisenstat-Walker forcing term: the momentum rows dominate the residual norm, and a looser solve leaves
+# the kinematic rows' velocity off by more than the LU path's (docs/performance.md)
+ETA_MAX = 1e-3
 
 
 @dataclass
@@ -70,7 +73,7 @@ class SolverOptions:
     krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
     krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
     # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
-    # Newton, each solve to eta_k in [krylov_rtol, 0.1] (MonolithicFSI._forcing)
+    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (MonolithicFSI._forcing)
     krylov_forcing: str = "fixed"
     # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
     # mesh blocks at the next fresh Jacobian
@@ -746,18 +749,18 @@ class MonolithicFSI:
     def _forcing(self, history, r0) -> float:
         """Relative tolerance of the next linear solve. "eisenstat_walker" (Eisenstat & Walker 1996, choice 2,
         gamma = 0.9, alpha = 2, with their safeguard): eta_k = 0.9 (r_k / r_k-1)^2, at least 0.9 eta_k-1^2 when
-        that exceeds 0.1, at most 0.1 (0.1 at a step's first iteration), and no smaller than needed to reach
-        Newton's tolerance from r_k (0.5 tol / r_k) nor than krylov_rtol."""
+        that exceeds 0.1; at most ETA_MAX (ETA_MAX at a step's first iteration), and no smaller than needed to
+        reach Newton's tolerance from r_k (0.5 tol / r_k) nor than krylov_rtol."""
         o = self.options
         if o.krylov_forcing == "fixed":
             return o.krylov_rtol
-        eta = 0.1
+        eta = ETA_MAX
         if len(history) > 1:
             eta = 0.9 * (history[-1] / history[-2]) ** 2
             if 0.9 * self._eta ** 2 > 0.1:
                 eta = max(eta, 0.9 * self._eta ** 2)
         target = max(o.newton_atol, o.newton_rtol * r0)
-        self._eta = min(0.1, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
+        self._eta = min(ETA_MAX, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
         return self._eta
 
     def newton(self):
