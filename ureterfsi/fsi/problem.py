@@ -273,6 +273,7 @@ class MonolithicFSI:
         if self.mesh_form is not None:
             self.Am = self._coupled_matrix(mesh_rows_only=True) if own else \
                 fem_petsc.create_matrix(self.mesh_jacobian_form)
+            self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
         self.ksp = PETSc.KSP().create(self.comm)
@@ -705,10 +706,11 @@ class MonolithicFSI:
         A.assemble()
         if self.mesh_jacobian_form is not None:
             Am = self.Am
-            Am.zeroEntries()
-            fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
-            Am.assemble()
-            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            if not self._mesh_jacobian_ready:     # a linear extension with a fixed stiffness: assembled once
+                fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
+                Am.assemble()
+                Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+                self._mesh_jacobian_ready = True
             A.axpy(1.0, Am, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._jacobian_valid = True
         self._jacobian_rate = self._rate()
