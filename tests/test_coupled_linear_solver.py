@@ -173,6 +173,19 @@ def test_turek_hron_fsi1_quantities_equal_the_lu_path():
     assert bgs.newton_iterations == lu.newton_iterations
 
 
+def test_the_fully_coupled_rung_reads_its_own_linear_solver():
+    from pathlib import Path
+
+    from ureterfsi.config import load_config_files
+    from ureterfsi.study import solver_options
+    cfg = load_config_files([str(Path(__file__).resolve().parents[1] / "config/config.yaml")])
+    cfg["solver"] |= {"linear_solver": "mumps", "fully_coupled_linear_solver": "block_gauss_seidel",
+                      "krylov_forcing": "eisenstat_walker"}
+    coupled, other = solver_options(cfg, fully_coupled=True), solver_options(cfg)
+    assert (coupled.linear_solver, other.linear_solver) == ("block_gauss_seidel", "mumps")
+    assert coupled.krylov_forcing == "eisenstat_walker"
+
+
 def test_refusals_and_failure_report():
     from test_fluid_alone import tube as fluid_tube
     from ureterfsi.fsi import FluidRegion, MonolithicFSI, NewtonianFluid, Scene
@@ -180,6 +193,9 @@ def test_refusals_and_failure_report():
     fluid_alone = Scene(msh, ct, ft, fluid=FluidRegion([1], NewtonianFluid(1000.0, 1e-3)))
     with pytest.raises(ValueError, match="needs non-empty splits"):
         MonolithicFSI(fluid_alone, SolverOptions(linear_solver="block_gauss_seidel"))
+    for key in ("krylov_forcing", "jacobian_sparsity"):
+        with pytest.raises(ValueError, match=f"{key} '"):
+            MonolithicFSI(fluid_alone, SolverOptions(**{key: "exact"}))
     with pytest.raises(ValueError, match="mesh_motion_coupling 'monolithic'"):
         MonolithicFSI(fluid_alone, SolverOptions(linear_solver="block_gauss_seidel",
                                                  mesh_motion_coupling="segregated"))
