@@ -428,7 +428,7 @@ class MonolithicFSI:
         (rows <- columns): fluid cells v, p <- v, p, u (ALE Navier-Stokes, open boundaries) and u <- u (mesh
         motion); solid cells v <- v, u (+ pi) (inertia, stress), u <- u, v (kinematics), pi <- u, pi
         (Mooney-Rivlin); every diagonal (pinned and Dirichlet rows). The mixed element's pattern couples every
-        dof of a cell with every other: 10 mm ureter segment 2.1e7 -> 8.2e6 entries (docs/performance.md).
+        dof of a cell with every other: 10 mm ureter segment 2.40e7 -> 1.89e7 entries (docs/performance.md).
         `mesh_rows_only`: the mesh-motion Jacobian (u <- u on fluid cells, and the diagonal)."""
         fluid = self._cells(self.fluid_tags)
         blocks = [(fluid, ["displacement"], ["displacement"])]
@@ -457,9 +457,10 @@ class MonolithicFSI:
         """PETSc matrix whose nonzeros are, for each (cells, row fields, column fields) of `blocks`, every row
         dof of a cell coupled with every column dof of that cell, plus the local rows `diagonal`; the structure
         fixed with zeros. Assembly inserts the whole mixed element's cell matrices (64 x 64 on a P2-P2-P1
-        tetrahedron): entries outside the pattern must be exact zeros, which are dropped (PETSc keeps zeros on
-        the diagonal, hence every diagonal a cell reaches is in the pattern). PETSc skips the exact zeros before
-        searching their row (MAT_IGNORE_ZERO_ENTRIES: coarse one-way model 3, assembly 2.2-2.4 -> 1.5-1.9 s)."""
+        tetrahedron): entries outside the pattern must be exact zeros, which PETSc skips before searching their
+        row (MAT_IGNORE_ZERO_ENTRIES: coarse one-way model 3, assembly 2.2-2.4 -> 1.5-1.9 s) - except on the
+        diagonal: a cell's diagonal outside the pattern fails the insertion of that cell matrix (silently in a
+        release build of dolfinx), hence every diagonal a cell reaches is in the pattern."""
         imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
         pattern = _cpp.la.SparsityPattern(self.comm, [imap, imap], [bs, bs])
         for cells, rows, cols in blocks:
