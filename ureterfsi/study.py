@@ -53,15 +53,18 @@ class RunSpec:
     dt: float | None = None        # override of time.dt
 
 
-def solver_options(cfg: dict) -> SolverOptions:
+def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
+    """The engine's options from `solver`; `fully_coupled`: the fully coupled rung's solve, whose linear solver is
+    `solver.fully_coupled_linear_solver`."""
     s = cfg["solver"]
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
                          newton_max_iterations=s["newton_max_iterations"], predictor=s["predictor"],
-                         linear_solver=s["linear_solver"],
+                         linear_solver=s["fully_coupled_linear_solver"] if fully_coupled else s["linear_solver"],
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
                          mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
-                         krylov_rtol=s["krylov_rtol"])
+                         krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
+                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"])
 
 
 class CoupledWall:
@@ -356,7 +359,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
     comm = _MPI.COMM_WORLD
     mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
     scene = ureter_scene(cfg, mesh, cell_tags, facet_tags, axisymmetric=spec.symmetry == "axisymmetric")
-    pb = MonolithicFSI(scene, solver_options(cfg))
+    pb = MonolithicFSI(scene, solver_options(cfg, fully_coupled=True))
     ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
     ncells = mesh.topology.index_map(mesh.topology.dim).size_global
     log.info("model %s, mesh %s (%s): %d cells, %d dofs, %d processes, setup %.1f s", spec.model, spec.level,
@@ -374,7 +377,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
     ds = probes_dataset(obs, records, cfg, spec, field_attrs | {
         "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end,
-        "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}",
+        "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {pb.options.linear_solver}",
         "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)})
     if comm.rank == 0:
         write_netcdf(ds, out_path)

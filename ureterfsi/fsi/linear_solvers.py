@@ -15,6 +15,8 @@ never the Newton iterate beyond the Krylov tolerance.
 """
 from __future__ import annotations
 
+import time
+
 from petsc4py import PETSc
 
 SPLITS = ("solid", "mesh", "flow")
@@ -49,10 +51,11 @@ class BlockGaussSeidel:
     `refactorise_iterations` Krylov iterations, after which the next fresh Jacobian refactorises every
     block. `invalidate()` (a failed step, a checkpoint) refactorises every block at the next one.
     `counters` (a dict, updated in place): Krylov iterations and the factorisations of each block, counted from
-    the factors' own PETSc object states."""
+    the factors' own PETSc object states; `timings` (updated in place): seconds in the extraction of the blocks
+    ("block_extraction"), in each block's set-up ("{split}_factorise") and in GMRES ("krylov")."""
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, splits: dict, rtol: float, max_iterations: int,
-                 refactorise_iterations: int, counters: dict, kept=("solid", "mesh")):
+                 refactorise_iterations: int, counters: dict, timings: dict, kept=("solid", "mesh")):
         if set(splits) != set(SPLITS) or any(splits[n].getSize() == 0 for n in SPLITS):
             sizes = {n: splits[n].getSize() for n in splits}
             raise ValueError(f"linear_solver 'block_gauss_seidel' needs non-empty splits {SPLITS} (a scene with a "
@@ -70,6 +73,8 @@ class BlockGaussSeidel:
         self.sizes = {n: splits[n].getSize() for n in SPLITS}
         self.counters = counters          # the problem's: incremented in place
         counters |= {"krylov_iterations": 0} | {f"{n}_factorisations": 0 for n in SPLITS}
+        self.timings = timings
+        timings |= {"block_extraction": 0.0, "krylov": 0.0} | {f"{n}_factorise": 0.0 for n in SPLITS}
         self._refresh = set(SPLITS)       # blocks to refactorise at the next fresh Jacobian
         self._states = None               # PETSc object states of the block factors after the last solve
 
@@ -88,8 +93,20 @@ class BlockGaussSeidel:
         """Refactorise every block at the next fresh Jacobian."""
         self._refresh = set(SPLITS)
 
-    def solve(self, b: PETSc.Vec, x: PETSc.Vec):
+    def solve(self, b: PETSc.Vec, x: PETSc.Vec, rtol: float):
+        """x = A^-1 b to GMRES's relative residual rtol."""
+        self.ksp.setTolerances(rtol=rtol)
+        t0 = time.perf_counter()
+        self.ksp.setUp()                  # PCFIELDSPLIT: extracts the blocks of a changed operator
+        t1 = time.perf_counter()
+        self.timings["block_extraction"] += t1 - t0
+        for name, sub in self.sub_ksps().items():
+            sub.setUp()                   # LU of a block unless its factor is kept
+            t2 = time.perf_counter()
+            self.timings[f"{name}_factorise"] += t2 - t1
+            t1 = t2
         self.ksp.solve(b, x)
+        self.timings["krylov"] += time.perf_counter() - t1
         its = self.ksp.getIterationNumber()
         self.counters["krylov_iterations"] += its
         states = {}

@@ -35,6 +35,9 @@ from .scene import Scene
 log = logging.getLogger("ureterfsi.fsi")
 
 FIELDS = ("velocity", "displacement", "pressure", "solid_pressure")
+# largest Eisenstat-Walker forcing term: the momentum rows dominate the residual norm, and a looser solve leaves
+# the kinematic rows' velocity off by more than the LU path's (docs/performance.md)
+ETA_MAX = 1e-3
 
 
 @dataclass
@@ -69,6 +72,9 @@ class SolverOptions:
     mesh_motion_rtol: float = 1e-9
     krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
     krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
+    # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
+    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (MonolithicFSI._forcing)
+    krylov_forcing: str = "fixed"
     # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
     # mesh blocks at the next fresh Jacobian
     krylov_refactorise_iterations: int = 10
@@ -77,6 +83,9 @@ class SolverOptions:
     # is a linear problem of its own (factorised once) solved before each step, and the Newton system
     # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
     mesh_motion_coupling: str = "monolithic"
+    # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
+    # (MonolithicFSI._coupled_matrix); "mixed_element" every dof of a cell with every other (the same matrix)
+    jacobian_sparsity: str = "couplings"
 
 
 def dirichlet_bcs(cond, base, facet_tags) -> list:
@@ -254,12 +263,22 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
-        self.A = self._flow_matrix() if self.segregated else fem_petsc.create_matrix(self.jacobian_form)
+        if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
+            raise ValueError(f"krylov_forcing 'fixed' or 'eisenstat_walker', got {opts.krylov_forcing!r}")
+        if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
+            raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
+        own = opts.jacobian_sparsity == "couplings"
+        if self.segregated:
+            self.A = self._flow_matrix()
+        else:
+            self.A = self._coupled_matrix() if own else fem_petsc.create_matrix(self.jacobian_form)
         self.b = fem_petsc.create_vector(self.residual_form)
         self._b_free = self.b.duplicate()
         self._reaction_ready = False    # _b_free holds the residual of the last accepted state (assemble_reaction)
         if self.mesh_form is not None:
-            self.Am = fem_petsc.create_matrix(self.mesh_jacobian_form)
+            self.Am = self._coupled_matrix(mesh_rows_only=True) if own else \
+                fem_petsc.create_matrix(self.mesh_jacobian_form)
+            self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
         self.ksp = PETSc.KSP().create(self.comm)
@@ -268,12 +287,14 @@ class MonolithicFSI:
         self.ksp.setOperators(self.A)
         self.coupled_solver = None
         self.counters = {"factorisations": 0, "reused_solves": 0}
+        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
+                        "mesh_motion": 0.0}
         if self.options.linear_solver == "fieldsplit":
             self._setup_fieldsplit(prefix)
         elif self.options.linear_solver == "block_gauss_seidel":
             self.coupled_solver = BlockGaussSeidel(
                 self.ksp, prefix, self._split_is(self.coupled_splits()), opts.krylov_rtol,
-                opts.krylov_max_iterations, opts.krylov_refactorise_iterations, self.counters)
+                opts.krylov_max_iterations, opts.krylov_refactorise_iterations, self.counters, self.timings)
         elif self.segregated:
             self._setup_flow_lu(prefix)
         else:
@@ -286,8 +307,6 @@ class MonolithicFSI:
                 PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5
         self.ksp.setFromOptions()
         self._jacobian_valid = False
-        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
-                        "mesh_motion": 0.0}
         if self.options.linear_solver == "fieldsplit":
             self.counters["krylov_iterations"] = 0
         if self.segregated and self.mesh_motion_solver == "cg_icc":
@@ -404,18 +423,60 @@ class MonolithicFSI:
         """Jacobian matrix of a fluid-alone Newton system with only the nonzeros its form has: every
         (velocity, pressure) coupling of a cell and the diagonal of the mirrored mesh-displacement rows. The
         form's sparsity would couple every dof of a cell (5.2e7 instead of 1.4e7 entries on the coarse model 3,
-        Jacobian assembly 2.9 instead of 1.6 s); the
-        displacement rows and columns hold exact zeros there (the flow rows see the mesh displacement as a
-        coefficient), which the matrix drops on insertion (MAT_NEW_NONZERO_LOCATIONS false)."""
+        Jacobian assembly 2.9 instead of 1.6 s); the displacement rows and columns hold exact zeros there (the
+        flow rows see the mesh displacement as a coefficient)."""
+        flow = [f for f in self.field_names if f != "displacement"]
+        return self._pattern_matrix([(np.arange(self._num_cells(), dtype=np.int32), flow, flow)],
+                                    np.unique(self._cell_dofs("displacement")))
+
+    def _coupled_matrix(self, mesh_rows_only=False):
+        """Jacobian matrix of the coupled Newton system with the couplings its forms have, per cell region
+        (rows <- columns): fluid cells v, p <- v, p, u (ALE Navier-Stokes, open boundaries) and u <- u (mesh
+        motion); solid cells v <- v, u (+ pi) (inertia, stress), u <- u, v (kinematics), pi <- u, pi
+        (Mooney-Rivlin); every diagonal (pinned and Dirichlet rows). The mixed element's pattern couples every
+        dof of a cell with every other: 10 mm ureter segment 2.40e7 -> 1.89e7 entries (docs/performance.md).
+        `mesh_rows_only`: the mesh-motion Jacobian (u <- u on fluid cells, and the diagonal)."""
+        fluid = self._cells(self.fluid_tags)
+        blocks = [(fluid, ["displacement"], ["displacement"])]
+        if not mesh_rows_only:
+            flow = [f for f in ("velocity", "pressure") if f in self.index]
+            blocks.append((fluid, flow, flow + ["displacement"]))
+            for s in self.scene.solids:
+                cells = self._cells(tuple(s.tags))
+                pi = ["solid_pressure"] if isinstance(s.material, MooneyRivlin) else []
+                blocks += [(cells, ["velocity"], ["velocity", "displacement"] + pi),
+                           (cells, ["displacement"], ["velocity", "displacement"]),
+                           (cells, pi, ["displacement"] + pi)]
+        imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
+        return self._pattern_matrix(blocks, np.arange(imap.size_local * bs, dtype=np.int32))
+
+    def _num_cells(self) -> int:
+        """Local cells, ghosts included."""
+        cmap = self.mesh.topology.index_map(self.mesh.topology.dim)
+        return cmap.size_local + cmap.num_ghosts
+
+    def _cell_dofs(self, field) -> np.ndarray:
+        """(cells, dofs per cell) local dofs of one field in the numbering of W."""
+        return self.W.sub(self.index[field]).dofmap.list.array.reshape(self._num_cells(), -1)
+
+    def _pattern_matrix(self, blocks, diagonal):
+        """PETSc matrix whose nonzeros are, for each (cells, row fields, column fields) of `blocks`, every row
+        dof of a cell coupled with every column dof of that cell, plus the local rows `diagonal`; the structure
+        fixed with zeros. Assembly inserts the whole mixed element's cell matrices (64 x 64 on a P2-P2-P1
+        tetrahedron): entries outside the pattern must be exact zeros, which PETSc skips before searching their
+        row (MAT_IGNORE_ZERO_ENTRIES: coarse one-way model 3, assembly 2.2-2.4 -> 1.5-1.9 s) - except on the
+        diagonal: a cell's diagonal outside the pattern fails the insertion of that cell matrix (silently in a
+        release build of dolfinx), hence every diagonal a cell reaches is in the pattern."""
         imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
         pattern = _cpp.la.SparsityPattern(self.comm, [imap, imap], [bs, bs])
-        ncells = self.mesh.topology.index_map(self.mesh.topology.dim).size_local \
-            + self.mesh.topology.index_map(self.mesh.topology.dim).num_ghosts
-        cell_dofs = lambda f: self.W.sub(self.index[f]).dofmap.list.array.reshape(ncells, -1)  # noqa: E731
-        flow = np.hstack([cell_dofs(f) for f in self.field_names if f != "displacement"]).astype(np.int32)
-        for dofs in flow:
-            pattern.insert(dofs, dofs)
-        pattern.insert_diagonal(np.unique(cell_dofs("displacement")).astype(np.int32))
+        for cells, rows, cols in blocks:
+            if not rows or cells.size == 0:
+                continue
+            r = np.hstack([self._cell_dofs(f) for f in rows])[cells].astype(np.int32)
+            c = np.hstack([self._cell_dofs(f) for f in cols])[cells].astype(np.int32)
+            for ri, ci in zip(r, c):
+                pattern.insert(ri, ci)
+        pattern.insert_diagonal(np.asarray(diagonal, dtype=np.int32))
         pattern.assemble()
         A = _cpp.la.petsc.create_matrix(self.comm, pattern)
         # fix the structure with zeros: the graph's owned rows, its columns in the pattern's own numbering
@@ -427,9 +488,6 @@ class MonolithicFSI:
         A.assemble()
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, False)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATIONS, False)
-        # the cell matrices are those of the whole mixed element, 64 x 64 on a P2-P2-P1 tetrahedron, of which the
-        # flow block is 34 x 34; PETSc skips the exact zeros before searching their row for a location the
-        # pattern does not have (coarse model 3: assembly 2.2-2.4 -> 1.5-1.9 s, the same matrix)
         A.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, True)
         return A
 
@@ -670,10 +728,11 @@ class MonolithicFSI:
         A.assemble()
         if self.mesh_jacobian_form is not None:
             Am = self.Am
-            Am.zeroEntries()
-            fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
-            Am.assemble()
-            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            if not self._mesh_jacobian_ready:     # a linear extension with a fixed stiffness: assembled once
+                fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
+                Am.assemble()
+                Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+                self._mesh_jacobian_ready = True
             A.axpy(1.0, Am, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._jacobian_valid = True
         self._jacobian_rate = self._rate()
@@ -711,6 +770,23 @@ class MonolithicFSI:
             self.invalidate_jacobian()
             raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
 
+    def _forcing(self, history, r0) -> float:
+        """Relative tolerance of the next linear solve. "eisenstat_walker" (Eisenstat & Walker 1996, choice 2,
+        gamma = 0.9, alpha = 2, with their safeguard): eta_k = 0.9 (r_k / r_k-1)^2, at least 0.9 eta_k-1^2 when
+        that exceeds 0.1; at most ETA_MAX (ETA_MAX at a step's first iteration), and no smaller than needed to
+        reach Newton's tolerance from r_k (0.5 tol / r_k) nor than krylov_rtol."""
+        o = self.options
+        if o.krylov_forcing == "fixed":
+            return o.krylov_rtol
+        eta = ETA_MAX
+        if len(history) > 1:
+            eta = 0.9 * (history[-1] / history[-2]) ** 2
+            if 0.9 * self._eta ** 2 > 0.1:
+                eta = max(eta, 0.9 * self._eta ** 2)
+        target = max(o.newton_atol, o.newton_rtol * r0)
+        self._eta = min(ETA_MAX, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
+        return self._eta
+
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
@@ -738,7 +814,7 @@ class MonolithicFSI:
                     self.coupled_solver.operator_changed()
             t0 = _time.perf_counter()
             if self.coupled_solver is not None:
-                self.coupled_solver.solve(self.b, self.dx_vec)
+                self.coupled_solver.solve(self.b, self.dx_vec, self._forcing(history, r0))
             else:
                 self.ksp.solve(self.b, self.dx_vec)
                 if "krylov_iterations" in self.counters:
