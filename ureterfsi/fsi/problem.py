@@ -436,13 +436,13 @@ class MonolithicFSI:
         (Mooney-Rivlin); every diagonal (pinned and Dirichlet rows). The mixed element's pattern couples every
         dof of a cell with every other: 10 mm ureter segment 2.40e7 -> 1.89e7 entries (docs/performance.md).
         `mesh_rows_only`: the mesh-motion Jacobian (u <- u on fluid cells, and the diagonal)."""
-        fluid = self._cells(self.fluid_tags)
+        fluid = self.cells(self.fluid_tags)
         blocks = [(fluid, ["displacement"], ["displacement"])]
         if not mesh_rows_only:
             flow = [f for f in ("velocity", "pressure") if f in self.index]
             blocks.append((fluid, flow, flow + ["displacement"]))
             for s in self.scene.solids:
-                cells = self._cells(tuple(s.tags))
+                cells = self.cells(tuple(s.tags))
                 pi = ["solid_pressure"] if isinstance(s.material, MooneyRivlin) else []
                 blocks += [(cells, ["velocity"], ["velocity", "displacement"] + pi),
                            (cells, ["displacement"], ["velocity", "displacement"]),
