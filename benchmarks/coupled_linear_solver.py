@@ -84,8 +84,8 @@ def run_variant(args):
            "krylov": krylov.per_step, "counters": dict(pb.counters), "timings": dict(pb.timings),
            "peak_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2,
            "jacobian_entries": pb.A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]}
-    if pb.coupled_solver is not None:
-        out["splits"] = pb.coupled_solver.sizes
+    if pb.linear_solver.sizes is not None:
+        out["splits"] = pb.linear_solver.sizes
     print("RESULT " + json.dumps(out))
 
 

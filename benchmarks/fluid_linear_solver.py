@@ -33,7 +33,8 @@ from petsc4py import PETSc
 
 from ureterfsi import oneway, tags
 from ureterfsi.config import load_config_files
-from ureterfsi.fsi.problem import MonolithicFSI, flow_lu_options, schur_fieldsplit_options
+from ureterfsi.fsi.linear_solvers import flow_lu_options, schur_fieldsplit_options
+from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.fsi.submesh import extract
 from ureterfsi.mesh import load_mesh
 from ureterfsi.scenes.ureter import ureter_fluid_scene

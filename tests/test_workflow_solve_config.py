@@ -26,3 +26,27 @@ def test_run_config_refuses_other_sections():
         run_config({k: v for k, v in sections.items() if k != "fields"}, model)
     with pytest.raises(ConfigError, match="must hold exactly"):
         run_config(sections | {"figures": cfg["figures"]}, model)
+
+
+def test_run_config_file_of_another_version_or_corrupt_is_named(tmp_path):
+    """A run configuration missing a key the schema now defaults (written by an older version), a truncated
+    file and one that is not an object: one line naming the file and what is wrong."""
+    from ureterfsi.config import read_run_config
+
+    cfg = load_config()
+    model = sorted(cfg["models"])[1]
+    sections = run_sections(cfg, model)
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(sections))
+    assert read_run_config(good, model) == run_config(json.loads(good.read_text()), model)
+    old = dict(sections, solver={k: v for k, v in sections["solver"].items() if k != "krylov_forcing"})
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    with pytest.raises(ConfigError, match=r"old\.json: solver\.krylov_forcing: missing: the file was written by "
+                                          r"another version"):
+        read_run_config(tmp_path / "old.json", model)
+    (tmp_path / "cut.json").write_text(good.read_text()[:100])
+    with pytest.raises(ConfigError, match=r"cut\.json: unreadable"):
+        read_run_config(tmp_path / "cut.json", model)
+    (tmp_path / "list.json").write_text("[1, 2]")
+    with pytest.raises(ConfigError, match=r"list\.json: must be a JSON object"):
+        read_run_config(tmp_path / "list.json", model)

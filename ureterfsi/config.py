@@ -23,6 +23,7 @@ syntax error is reported as ``file:line:column``.
 from __future__ import annotations
 
 import copy
+import json
 import math
 import re
 import sys
@@ -648,7 +649,28 @@ def run_config(sections: dict, model: str) -> dict:
     want = set(RUN_SECTIONS) | {"model"}
     if set(sections) != want:
         raise ConfigError("<run config>", f"must hold exactly the sections {sorted(want)}, got {sorted(sections)}")
+    for name in RUN_SECTIONS:
+        missing = sorted(set(schema_defaults(name)) - set(sections[name]))
+        if missing:
+            raise ConfigError(f"<run config> {name}.{missing[0]}", "missing: the file was written by another version "
+                              "of ureterfsi (re-run rule solve_config)")
     return {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+
+
+def read_run_config(path, model: str) -> dict:
+    """run_config of the JSON file rule solve_config wrote; ConfigError naming the file when it is not one."""
+    try:
+        with open(path) as fh:
+            sections = json.load(fh)
+    except (OSError, ValueError) as err:
+        raise ConfigError(f"<run config> {path}", f"unreadable ({err})") from None
+    if not isinstance(sections, dict):
+        raise ConfigError(f"<run config> {path}", "must be a JSON object of configuration sections")
+    try:
+        return run_config(sections, model)
+    except ConfigError as err:
+        raise ConfigError(f"<run config> {path}: {err.key.removeprefix('<run config>').strip()}",
+                          err.constraint) from None
 
 
 def wall_sections(cfg: dict) -> dict:

@@ -1,4 +1,8 @@
-"""Krylov linear solvers of the coupled (monolithic ALE) Newton system.
+"""Linear solvers of the engine's Newton system: strategies of MonolithicFSI chosen by SolverOptions.linear_solver.
+
+`WholeSystemLU` (a direct package: LU of the whole system), `FlowBlockLU` (a direct package in a fluid-alone
+scene: LU of the velocity-pressure block), `SchurFieldsplit` (`fieldsplit`, fluid-alone: GMRES with a Schur
+block preconditioner) and, for coupled scenes,
 
 `BlockGaussSeidel` (`SolverOptions.linear_solver: block_gauss_seidel`): GMRES, right-preconditioned by one
 block Gauss-Seidel sweep over the splits solid -> mesh -> flow (PETSc PCFIELDSPLIT, multiplicative), with
@@ -43,7 +47,134 @@ def block_gauss_seidel_options(rtol: float, max_iterations: int) -> dict:
     return opts
 
 
-class BlockGaussSeidel:
+def flow_lu_options(package: str) -> dict:
+    """PETSc options (under the KSP prefix) of the segregated direct solve: PCFieldSplit additive over the
+    splits "mirror" (Jacobi) and "flow" (LU by `package`; METIS ordering for MUMPS)."""
+    opts = {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",
+            "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
+            "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
+            "fieldsplit_flow_pc_factor_mat_solver_type": package}
+    if package == "mumps":
+        opts["fieldsplit_flow_mat_mumps_icntl_7"] = 5
+    return opts
+
+
+def schur_fieldsplit_options(rtol: float, max_iterations: int) -> dict:
+    """PETSc options (under the KSP prefix) of linear_solver "fieldsplit" over the splits "momentum" and
+    "pressure": GMRES, lower Schur factorisation with the "selfp" approximation, ILU(0) / BoomerAMG."""
+    return {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_pc_side": "right", "ksp_rtol": rtol,
+            "ksp_atol": 0.0, "ksp_max_it": max_iterations, "pc_type": "fieldsplit",
+            "pc_fieldsplit_type": "schur", "pc_fieldsplit_schur_fact_type": "lower",
+            "pc_fieldsplit_schur_precondition": "selfp",
+            "fieldsplit_momentum_ksp_type": "preonly", "fieldsplit_momentum_pc_type": "ilu",
+            "fieldsplit_pressure_ksp_type": "preonly", "fieldsplit_pressure_pc_type": "hypre"}
+
+
+class LinearSolver:
+    """A strategy for the Newton system A dx = -R of MonolithicFSI, chosen by SolverOptions.linear_solver: it
+    sets up `ksp`; `operator_changed()` after each fresh Jacobian, `invalidate()` to refactorise everything at
+    the next one, `solve(b, x, rtol)`, `failure_detail()` (why the last solve failed)."""
+    sizes = None                          # {split: unknowns} of the block strategies
+
+    def __init__(self, ksp: PETSc.KSP, counters: dict):
+        self.ksp, self.counters = ksp, counters
+
+    def operator_changed(self):
+        pass
+
+    def invalidate(self):
+        pass
+
+    def solve(self, b: PETSc.Vec, x: PETSc.Vec, rtol: float):
+        self.ksp.solve(b, x)
+
+    def failure_detail(self) -> str:
+        return ""
+
+    def factor_matrix(self):
+        raise TypeError(f"linear solver {type(self).__name__} has no single LU factor")
+
+
+def mumps_status(factor) -> str:
+    return (f"; MUMPS INFOG(1) = {factor.getMumpsInfog(1)}, INFOG(2) = {factor.getMumpsInfog(2)} "
+            f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
+
+
+class WholeSystemLU(LinearSolver):
+    """LU of the whole Newton system by a direct package (MUMPS with the METIS nested-dissection ordering,
+    which suits 3D meshes)."""
+
+    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, counters: dict):
+        super().__init__(ksp, counters)
+        self.package = package
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType(package)
+        if package == "mumps":
+            PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5
+
+    def factor_matrix(self):
+        return self.ksp.getPC().getFactorMatrix()
+
+    def failure_detail(self) -> str:
+        return mumps_status(self.factor_matrix()) if self.package == "mumps" else ""
+
+
+class FlowBlockLU(LinearSolver):
+    """Direct solve of a fluid-alone Newton system. Its Jacobian is block diagonal: the flow (velocity,
+    pressure) block and the identity rows of the mirrored mesh displacement, whose columns the flow rows do
+    not touch. LU of the flow block alone (PCFieldSplit, additive): even with the matrix's own sparsity
+    (MonolithicFSI._flow_matrix), MUMPS's analysis of the whole matrix (METIS on the isolated mirror dofs) is slow;
+    measured on the coarse model 3 (benchmarks/fluid_linear_solver.py): first solve 38.9 s (whole) vs
+    3.7 s (flow block), kept solve 0.17 vs 0.13 s, LU memory 1 294 vs 1 149 MB. (Before the own sparsity,
+    the whole-matrix LU took 20-37 s and 4.2 GB.)"""
+
+    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, counters: dict):
+        super().__init__(ksp, counters)
+        self.package = package
+        o = PETSc.Options()
+        for key, value in flow_lu_options(package).items():
+            o[f"{prefix}{key}"] = value
+        pc = ksp.getPC()
+        pc.setType("fieldsplit")
+        pc.setFieldSplitIS(*splits)
+
+    def factor_matrix(self):
+        return self.ksp.getPC().getFieldSplitSubKSP()[1].getPC().getFactorMatrix()
+
+    def failure_detail(self) -> str:
+        return mumps_status(self.factor_matrix()) if self.package == "mumps" else ""
+
+
+class SchurFieldsplit(LinearSolver):
+    """GMRES on the Newton system [[A, -B^T], [B, 0]] of a fluid-alone scene, right-preconditioned by the
+    lower block factorisation with the Schur complement S = B A^-1 B^T approximated by B diag(A)^-1 B^T
+    (PCFieldSplit "selfp", a SIMPLE-type approximation suited to the mass-dominated A of small time steps;
+    Elman, Silvester & Wathen 2014, ch. 9): ILU(0) on A (cheaper here than AMG, whose V-cycles on the P2
+    block cost 7x more for the same iteration count: benchmarks/fluid_linear_solver.py), BoomerAMG on
+    the Schur approximation. The mirrored mesh-displacement rows (identity) go with the velocity block."""
+
+    def __init__(self, ksp: PETSc.KSP, prefix: str, splits: list, rtol: float, max_iterations: int, counters: dict):
+        super().__init__(ksp, counters)
+        o = PETSc.Options()
+        for key, value in schur_fieldsplit_options(rtol, max_iterations).items():
+            o[f"{prefix}{key}"] = value
+        pc = ksp.getPC()
+        pc.setType("fieldsplit")
+        pc.setFieldSplitIS(*splits)
+        counters["krylov_iterations"] = 0
+
+    def solve(self, b: PETSc.Vec, x: PETSc.Vec, rtol: float):
+        self.ksp.solve(b, x)
+        self.counters["krylov_iterations"] += self.ksp.getIterationNumber()
+
+    def failure_detail(self) -> str:
+        return (f" after {self.ksp.getIterationNumber()} Krylov iterations, residual "
+                f"{self.ksp.getResidualNorm():.3e} (-3: iteration limit, -5/-9: breakdown/NaN)")
+
+
+class BlockGaussSeidel(LinearSolver):
     """Block Gauss-Seidel-preconditioned GMRES with kept block factors.
 
     At every fresh Jacobian the flow block is refactorised; the solid and mesh factors are kept (the mesh

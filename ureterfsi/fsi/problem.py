@@ -27,8 +27,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics
-from .linear_solvers import KRYLOV, BlockGaussSeidel, direct_package
+from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
+                             direct_package)
 from .materials import LinearElastic, MooneyRivlin
+from .mesh_motion import Extension, PrescribedMap
 from .operators import Operators
 from .scene import Scene
 
@@ -58,7 +60,7 @@ class SolverOptions:
     reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
     # a direct package (mumps, superlu_dist, superlu, umfpack: LU of the Newton system) or "fieldsplit": Krylov
     # with a Schur-complement block preconditioner (fluid-alone scenes with segregated mesh motion only, see
-    # MonolithicFSI._setup_fieldsplit), whose memory grows ~linearly with the mesh
+    # linear_solvers.SchurFieldsplit), whose memory grows ~linearly with the mesh
     # or "block_gauss_seidel": GMRES with a solid -> mesh -> flow block Gauss-Seidel preconditioner, MUMPS LU on
     # each block (coupled FSI scenes, monolithic mesh motion; ureterfsi.fsi.linear_solvers)
     linear_solver: str = "mumps"
@@ -105,29 +107,6 @@ def dirichlet_bcs(cond, base, facet_tags) -> list:
             bc = fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets))
         out.append((bc, g, c))
     return out
-
-
-def flow_lu_options(package: str) -> dict:
-    """PETSc options (under the KSP prefix) of the segregated direct solve: PCFieldSplit additive over the
-    splits "mirror" (Jacobi) and "flow" (LU by `package`; METIS ordering for MUMPS)."""
-    opts = {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",
-            "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
-            "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
-            "fieldsplit_flow_pc_factor_mat_solver_type": package}
-    if package == "mumps":
-        opts["fieldsplit_flow_mat_mumps_icntl_7"] = 5
-    return opts
-
-
-def schur_fieldsplit_options(rtol: float, max_iterations: int) -> dict:
-    """PETSc options (under the KSP prefix) of linear_solver "fieldsplit" over the splits "momentum" and
-    "pressure": GMRES, lower Schur factorisation with the "selfp" approximation, ILU(0) / BoomerAMG."""
-    return {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_pc_side": "right", "ksp_rtol": rtol,
-            "ksp_atol": 0.0, "ksp_max_it": max_iterations, "pc_type": "fieldsplit",
-            "pc_fieldsplit_type": "schur", "pc_fieldsplit_schur_fact_type": "lower",
-            "pc_fieldsplit_schur_precondition": "selfp",
-            "fieldsplit_momentum_ksp_type": "preonly", "fieldsplit_momentum_pc_type": "ilu",
-            "fieldsplit_pressure_ksp_type": "preonly", "fieldsplit_pressure_pc_type": "hypre"}
 
 
 class NewtonDivergence(RuntimeError):
@@ -256,6 +235,9 @@ class MonolithicFSI:
             self.mesh_jacobian_form = fem.form(ufl.derivative(Rm, self.x))
 
         # --- constraints --------------------------------------------------------------------
+        self.counters = {"factorisations": 0, "reused_solves": 0}
+        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
+                        "mesh_motion": 0.0}
         self._build_dirichlet()
         self._build_pins_and_interface(fluid_tags, solid_tags, mr_tags)
         self.bcs = self.dirichlet_bcs + self.pin_bcs
@@ -285,32 +267,9 @@ class MonolithicFSI:
         prefix = f"ureterfsi_{id(self)}_"
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.A)
-        self.coupled_solver = None
-        self.counters = {"factorisations": 0, "reused_solves": 0}
-        self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
-                        "mesh_motion": 0.0}
-        if self.options.linear_solver == "fieldsplit":
-            self._setup_fieldsplit(prefix)
-        elif self.options.linear_solver == "block_gauss_seidel":
-            self.coupled_solver = BlockGaussSeidel(
-                self.ksp, prefix, self._split_is(self.coupled_splits()), opts.krylov_rtol,
-                opts.krylov_max_iterations, opts.krylov_refactorise_iterations, self.counters, self.timings)
-        elif self.segregated:
-            self._setup_flow_lu(prefix)
-        else:
-            self.ksp.setType("preonly")
-            pc = self.ksp.getPC()
-            pc.setType("lu")
-            pc.setFactorSolverType(self.options.linear_solver)
-            if self.options.linear_solver == "mumps":
-                # METIS fill-reducing nested-dissection ordering (suits 3D meshes)
-                PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5
+        self.linear_solver = self._linear_solver(prefix)
         self.ksp.setFromOptions()
         self._jacobian_valid = False
-        if self.options.linear_solver == "fieldsplit":
-            self.counters["krylov_iterations"] = 0
-        if self.segregated and self.mesh_motion_solver == "cg_icc":
-            self.counters["mesh_motion_iterations"] = 0
         self.min_jacobian_expr = None
         if fluid_tags:
             self._setup_ale_jacobian(u, fluid_tags)
@@ -535,128 +494,65 @@ class MonolithicFSI:
         return {name: PETSc.IS().createGeneral((dofs + offset).astype(PETSc.IntType), comm=self.comm)
                 for name, dofs in splits.items()}
 
-    def _setup_flow_lu(self, prefix):
-        """Direct solve of a fluid-alone Newton system. Its Jacobian is block diagonal: the flow (velocity,
-        pressure) block and the identity rows of the mirrored mesh displacement, whose columns the flow rows do
-        not touch. LU of the flow block alone (PCFieldSplit, additive): even with the matrix's own sparsity
-        (_flow_matrix), MUMPS's analysis of the whole matrix (METIS on the isolated mirror dofs) is slow;
-        measured on the coarse model 3 (benchmarks/fluid_linear_solver.py): first solve 38.9 s (whole) vs
-        3.7 s (flow block), kept solve 0.17 vs 0.13 s, LU memory 1 294 vs 1 149 MB. (Before the own sparsity,
-        the whole-matrix LU took 20-37 s and 4.2 GB.)"""
-        o = PETSc.Options()
-        for key, value in flow_lu_options(self.options.linear_solver).items():
-            o[f"{prefix}{key}"] = value
-        pc = self.ksp.getPC()
-        pc.setType("fieldsplit")
-        pc.setFieldSplitIS(*self.field_is({"mirror": ["displacement"],
-                                            "flow": [f for f in self.field_names if f != "displacement"]}))
+    def _linear_solver(self, prefix) -> LinearSolver:
+        """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block
+        (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
+        o = self.options
+        if o.linear_solver == "fieldsplit":
+            splits = self.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
+                                    "pressure": ["pressure"]})
+            return SchurFieldsplit(self.ksp, prefix, splits, o.krylov_rtol, o.krylov_max_iterations, self.counters)
+        if o.linear_solver == "block_gauss_seidel":
+            return BlockGaussSeidel(self.ksp, prefix, self._split_is(self.coupled_splits()), o.krylov_rtol,
+                                    o.krylov_max_iterations, o.krylov_refactorise_iterations, self.counters,
+                                    self.timings)
+        if self.segregated:
+            splits = self.field_is({"mirror": ["displacement"],
+                                    "flow": [f for f in self.field_names if f != "displacement"]})
+            return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters)
+        return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters)
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
-        pc = self.ksp.getPC()
-        if pc.getType() == "fieldsplit":
-            pc = self.ksp.getPC().getFieldSplitSubKSP()[1].getPC()
-        return pc.getFactorMatrix()
-
-    def _setup_fieldsplit(self, prefix):
-        """GMRES on the Newton system [[A, -B^T], [B, 0]] of a fluid-alone scene, right-preconditioned by the
-        lower block factorisation with the Schur complement S = B A^-1 B^T approximated by B diag(A)^-1 B^T
-        (PCFieldSplit "selfp", a SIMPLE-type approximation suited to the mass-dominated A of small time steps;
-        Elman, Silvester & Wathen 2014, ch. 9): ILU(0) on A (cheaper here than AMG, whose V-cycles on the P2
-        block cost 7x more for the same iteration count: benchmarks/fluid_linear_solver.py), BoomerAMG on
-        the Schur approximation. The mirrored mesh-displacement rows (identity) go with the velocity block."""
-        o = PETSc.Options()
-        for key, value in schur_fieldsplit_options(self.options.krylov_rtol,
-                                                   self.options.krylov_max_iterations).items():
-            o[f"{prefix}{key}"] = value
-        pc = self.ksp.getPC()
-        pc.setType("fieldsplit")
-        pc.setFieldSplitIS(*self.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
-                                            "pressure": ["pressure"]}))
+        return self.linear_solver.factor_matrix()
 
     def _setup_mesh_motion(self, dx_fluid):
-        """Segregated mesh motion: the scene's prescribed ALE map, or the linear extension problem,
-        assembled and factorised once."""
-        self.mesh_motion_mismatch = 0.0
+        """Segregated mesh motion: the scene's prescribed ALE map, or the linear extension problem (LU, or CG
+        above SolverOptions.mesh_motion_direct_max_unknowns)."""
+        d = self.mesh_displacement
         if self.scene.mesh_motion is not None:
-            self.mesh_motion_solver = "prescribed"
+            self.mesh_motion = PrescribedMap(d, self.mesh_bcs, self.scene.mesh_motion, self.comm)
             return
-        V = self.mesh_space
-        a = physics.mesh_motion_residual(self.ops, self.options.mesh_motion, ufl.TrialFunction(V),
-                                         ufl.TestFunction(V), self.stiffness, dx_fluid)
-        self._mesh_a = fem.form(a)
-        self._mesh_L = fem.form(ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())),
-                                          ufl.TestFunction(V)) * dx_fluid)
-        A = fem_petsc.assemble_matrix(self._mesh_a, bcs=self.mesh_bcs)
-        A.assemble()
-        self._mesh_A, self._mesh_b = A, fem_petsc.create_vector(self._mesh_L)
-        self._mesh_ksp = ksp = PETSc.KSP().create(self.comm)
-        ksp.setOperators(A)
-        limit = self.options.mesh_motion_direct_max_unknowns
-        self.mesh_motion_solver = "lu" if limit is None or V.dofmap.index_map.size_global * V.dofmap.index_map_bs \
-            <= limit else "cg_icc"
-        if self.mesh_motion_solver == "cg_icc":
-            # the stiffened vector Laplacian (or elasticity) is SPD: conjugate gradients, ICC(0) (cheaper here
-            # than smoothed-aggregation AMG: 0.7 vs 1.5 s per solve on the coarse model 3), started from the
-            # displacement extrapolated from the last two steps (solve_mesh_motion)
-            ksp.setType("cg")
-            ksp.setTolerances(rtol=self.options.mesh_motion_rtol, atol=0.0, max_it=2000)
-            ksp.setInitialGuessNonzero(True)
-            ksp.getPC().setType("icc")
-        else:
-            ksp.setType("preonly")
-            ksp.getPC().setType("lu")
-            direct = direct_package(self.options.linear_solver)
-            ksp.getPC().setFactorSolverType(direct)
-            if direct == "mumps":
-                ksp.setOptionsPrefix(f"ureterfsi_mesh_{id(self)}_")
-                PETSc.Options()[f"ureterfsi_mesh_{id(self)}_mat_mumps_icntl_7"] = 5     # METIS ordering
-                ksp.setFromOptions()
+        V, o = self.mesh_space, self.options
+        a = physics.mesh_motion_residual(self.ops, o.mesh_motion, ufl.TrialFunction(V), ufl.TestFunction(V),
+                                         self.stiffness, dx_fluid)
+        L = ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())), ufl.TestFunction(V)) * dx_fluid
+        limit = o.mesh_motion_direct_max_unknowns
+        unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+        self.mesh_motion = Extension(d, self.mesh_bcs, a, L, self.comm,
+                                     iterative=limit is not None and unknowns > limit,
+                                     package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
+                                     prefix=f"ureterfsi_mesh_{id(self)}_", counters=self.counters)
+
+    @property
+    def mesh_motion_solver(self) -> str:
+        """How the segregated mesh motion is found: prescribed, lu or cg_icc."""
+        return self.mesh_motion.name
+
+    @property
+    def mesh_motion_mismatch(self) -> float:
+        """Largest disagreement of a prescribed ALE map with the boundary motion, of the displacement (0 else)."""
+        return self.mesh_motion.mismatch
 
     def solve_mesh_motion(self):
-        """Mesh displacement of the current time from the prescribed boundary displacement. The iterative
-        solve starts from the linear extrapolation u_n + (dt/dt_prev)(u_n - u_n-1) of the mirrored history in
-        x_n, x_nm1 (which checkpoints hold, so a resumed run starts from the same guess)."""
+        """Mesh displacement of the current time from the prescribed boundary displacement. An iterative solve
+        starts from the linear extrapolation u_n + (dt/dt_prev)(u_n - u_n-1) of the mirrored history in x_n,
+        x_nm1 (which checkpoints hold, so a resumed run starts from the same guess)."""
         t0 = _time.perf_counter()
-        if self.mesh_motion_solver == "prescribed":
-            self._prescribed_mesh_motion()
-            self.timings["mesh_motion"] += _time.perf_counter() - t0
-            return
-        if self.mesh_motion_solver == "cg_icc":
-            u_n, u_nm1 = self.x_n.x.array[self._mesh_dofs], self.x_nm1.x.array[self._mesh_dofs]
-            w = float(self.dt.value) / self.dt_prev if self.dt_prev else 0.0
-            self.mesh_displacement.x.array[:] = u_n + w * (u_n - u_nm1)
-        b = self._mesh_b
-        with b.localForm() as loc:
-            loc.set(0.0)
-        fem_petsc.apply_lifting(b, [self._mesh_a], [self.mesh_bcs])
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem_petsc.set_bc(b, self.mesh_bcs)
-        self._mesh_ksp.solve(b, self.mesh_displacement.vector)
-        if self.mesh_motion_solver == "cg_icc":
-            self.counters["mesh_motion_iterations"] += self._mesh_ksp.getIterationNumber()
-        if self._mesh_ksp.getConvergedReason() < 0:
-            raise RuntimeError(f"mesh-motion solve failed: PETSc KSP reason {self._mesh_ksp.getConvergedReason()} "
-                               f"after {self._mesh_ksp.getIterationNumber()} CG iterations")
-        self.mesh_displacement.x.scatter_forward()
+        u_n, u_nm1 = self.x_n.x.array[self._mesh_dofs], self.x_nm1.x.array[self._mesh_dofs]
+        w = float(self.dt.value) / self.dt_prev if self.dt_prev else 0.0
+        self.mesh_motion.solve(float(self.t.value), u_n + w * (u_n - u_nm1))
         self.timings["mesh_motion"] += _time.perf_counter() - t0
-
-    def _prescribed_mesh_motion(self):
-        """The scene's ALE map at the current time, interpolated; the displacement Dirichlet values then set
-        on their dofs. Their largest disagreement relative to the largest displacement so far is kept in
-        `mesh_motion_mismatch` (a map that ignores the boundary motion is an error of the scene)."""
-        d, t = self.mesh_displacement, float(self.t.value)
-        d.interpolate(lambda x: self.scene.mesh_motion(x, t))
-        before = d.x.array.copy()
-        fem_petsc.set_bc(d.vector, self.mesh_bcs)
-        d.x.scatter_forward()
-        scale = self.comm.allreduce(float(np.abs(d.x.array).max(initial=0.0)), MPI.MAX)
-        if scale > 0.0:
-            gap = self.comm.allreduce(float(np.abs(d.x.array - before).max(initial=0.0)), MPI.MAX) / scale
-            self.mesh_motion_mismatch = max(self.mesh_motion_mismatch, gap)
-            if gap > 0.05:
-                raise ValueError(f"Scene.mesh_motion disagrees with the displacement Dirichlet conditions by {gap:.1%} "
-                                 f"of the largest displacement at t = {t:g} s")
 
     def _setup_ale_jacobian(self, u, fluid_tags):
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
@@ -750,23 +646,13 @@ class MonolithicFSI:
     def invalidate_jacobian(self):
         """Force a fresh Jacobian and factorisation (of every block) at the next Newton iteration."""
         self._jacobian_valid = False
-        if self.coupled_solver is not None:
-            self.coupled_solver.invalidate()
+        self.linear_solver.invalidate()
 
     def _check_linear_solve(self, history):
         """A failed factorisation (e.g. MUMPS out of workspace) leaves a useless update: say so."""
         reason = self.ksp.getConvergedReason()
         if reason < 0:
-            detail = ""
-            if self.coupled_solver is not None:
-                detail = self.coupled_solver.failure_detail()
-            elif self.options.linear_solver == "fieldsplit":
-                detail = (f" after {self.ksp.getIterationNumber()} Krylov iterations, residual "
-                          f"{self.ksp.getResidualNorm():.3e} (-3: iteration limit, -5/-9: breakdown/NaN)")
-            elif self.options.linear_solver == "mumps":
-                F = self.factor_matrix()
-                detail = (f"; MUMPS INFOG(1) = {F.getMumpsInfog(1)}, INFOG(2) = {F.getMumpsInfog(2)} "
-                          f"(-8/-9/-13: workspace or memory, -10: singular matrix)")
+            detail = self.linear_solver.failure_detail()
             self.invalidate_jacobian()
             raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
 
@@ -810,15 +696,9 @@ class MonolithicFSI:
             if fresh:
                 self._assemble_jacobian()
                 self.ksp.setOperators(self.A)
-                if self.coupled_solver is not None:
-                    self.coupled_solver.operator_changed()
+                self.linear_solver.operator_changed()
             t0 = _time.perf_counter()
-            if self.coupled_solver is not None:
-                self.coupled_solver.solve(self.b, self.dx_vec, self._forcing(history, r0))
-            else:
-                self.ksp.solve(self.b, self.dx_vec)
-                if "krylov_iterations" in self.counters:
-                    self.counters["krylov_iterations"] += self.ksp.getIterationNumber()
+            self.linear_solver.solve(self.b, self.dx_vec, self._forcing(history, r0))
             self._check_linear_solve(history)
             self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
             self.counters["factorisations" if fresh else "reused_solves"] += 1
