@@ -652,7 +652,7 @@ def run_config(sections: dict, model: str) -> dict:
 
 
 def wall_sections(cfg: dict) -> dict:
-    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.oneway.wall_history): a change
+    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
     re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
     return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
         k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
