@@ -544,7 +544,7 @@ def check_stability(cfg):
     st = cfg.get("stability")
     if st is None:
         return
-    from ureterfsi.stability import Case
+    from ureterfsi.stability.cases import Case
 
     levels, models = cfg["mesh"]["levels"], cfg["models"]
     if st["level"] not in levels:
