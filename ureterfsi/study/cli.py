@@ -53,10 +53,11 @@ def main(argv=None) -> int:
     ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
     ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
     ap.add_argument("--wall", default=None,
-                    help="one_way: the wall-motion dataset to read (rule wall_motion, ureterfsi.study.oneway.write_wall_motion) "
-                         "instead of solving the wall")
+                    help="one_way: the wall-motion dataset to read (rule wall_motion, "
+                         "ureterfsi.study.oneway.write_wall_motion) instead of solving the wall")
     ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
-                    help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, ureterfsi.study.oneway)")
+                    help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, "
+                         "ureterfsi.study.oneway)")
     args = ap.parse_args(argv)
     configure_logging()
     try:

@@ -19,8 +19,9 @@ def pose(cfg: dict, spec: RunSpec, settings, mesh, cell_tags, facet_tags) -> pip
     scene = ureter_scene(cfg, mesh, cell_tags, facet_tags, axisymmetric=spec.symmetry == "axisymmetric")
     pb = MonolithicFSI(scene, solver_options(cfg))
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
+    stent = obs.stent if obs.has_stent else None
     return pipeline.Posed(
-        pb, obs, lambda q: coupled_parts(pb, obs.stent if obs.has_stent else None, q, cfg["fluid"]["reference_pressure"]),
+        pb, obs, lambda q: coupled_parts(pb, stent, q, cfg["fluid"]["reference_pressure"]),
         solver=f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {cfg['solver']['linear_solver']}")
 
 

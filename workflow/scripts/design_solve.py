@@ -11,5 +11,6 @@ w = snakemake.wildcards  # noqa: F821
 study = studies(snakemake.config)[w.design_study]  # noqa: F821
 with open(snakemake.log[0], "w") as log:  # noqa: F821
     configure_logging(log)
-    solve(study.point(w.point).config, RunSpec(study.model, study.level, study.symmetry, snakemake.input.mesh),  # noqa: F821
-          study.rung, snakemake.output[0], snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821
+    spec = RunSpec(study.model, study.level, study.symmetry, snakemake.input.mesh)  # noqa: F821
+    solve(study.point(w.point).config, spec, study.rung, snakemake.output[0],  # noqa: F821
+          snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821
