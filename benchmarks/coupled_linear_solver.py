@@ -38,7 +38,7 @@ def run_variant(args):
     from ureterfsi.fsi.problem import MonolithicFSI
     from ureterfsi.mesh import load_mesh
     from ureterfsi.scenes.ureter import ureter_scene
-    from ureterfsi.study import solver_options
+    from ureterfsi.study.options import solver_options
 
     cfg = load_config_files(args.config)
     solver, _, overrides = args.variant.partition(":")

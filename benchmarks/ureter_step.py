@@ -24,7 +24,7 @@ from ureterfsi.fsi import TimeIntegrator, TimeSettings
 from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.mesh import build_mesh, load_mesh
 from ureterfsi.scenes.ureter import ureter_scene
-from ureterfsi.study import solver_options
+from ureterfsi.study.options import solver_options
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -1,5 +1,5 @@
 """Study datasets and figures from synthetic per-run datasets with the exact structure of
-ureterfsi.study.probes_dataset and known analytic values (outlet flux = A sin(t), ...)."""
+ureterfsi.study.probes.probes_dataset and known analytic values (outlet flux = A sin(t), ...)."""
 from __future__ import annotations
 
 import sys
@@ -21,7 +21,9 @@ from ureterfsi import aggregate, plotting
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.metadata import VARIABLES as CF
-from ureterfsi.study import HOLE_FRACTION, N_HOLE, N_LINE, RunSpec, UreterProbes, probes_dataset
+from ureterfsi.geometry import HOLE_FRACTION
+from ureterfsi.study.options import RunSpec
+from ureterfsi.study.probes import N_HOLE, N_LINE, UreterProbes, probes_dataset
 
 FLUX_AMPLITUDE = 1e-8         # m^3/s
 VM_BASE = 5e3                 # Pa

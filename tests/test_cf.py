@@ -117,7 +117,7 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
     elif kind == "gci":
         ds = gci_dataset(convergence_dataset()[0])
     elif kind == "wall_motion":
-        from ureterfsi.oneway import WallHistory
+        from ureterfsi.study.oneway import WallHistory
 
         t, zi, zo = np.linspace(0, 0.1, 5), np.linspace(0, 0.05, 7), np.linspace(0, 0.05, 9)
         w = WallHistory(t, zi, *(np.random.default_rng(k).normal(size=(5, 7)) * 1e-4 for k in range(4)),

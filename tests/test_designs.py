@@ -287,7 +287,7 @@ def test_strictured_design_point_end_to_end(tmp_path):
 def test_radial_blend_follows_the_strictured_wall():
     """The one-way ALE map moves a node on the narrowed wall R_i(z) with the wall and leaves the stent still."""
     from ureterfsi.geometry import UreterGeometry
-    from ureterfsi.oneway import WallHistory, radial_blend
+    from ureterfsi.study.oneway import WallHistory, radial_blend
 
     cfg = load_config(BASE, {"geometry": {"stricture_fraction": 0.6}})
     g = UreterGeometry.from_config(cfg)

@@ -142,7 +142,8 @@ def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root,
     import logging
 
     from ureterfsi.fsi import TimeIntegrator
-    from ureterfsi.study import RunSpec, run
+    from ureterfsi.study.coupled import run
+    from ureterfsi.study.options import RunSpec
 
     msh, _ = rz_mesh
     base = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
@@ -188,7 +189,7 @@ def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root,
 
 
 def test_solve_of_a_truncated_mesh_is_one_line_on_stderr(rz_mesh, tmp_path, repo_root, capsys):
-    from ureterfsi.study import main
+    from ureterfsi.study.cli import main
 
     msh, _ = rz_mesh
     cut = tmp_path / "cut.msh"

@@ -63,7 +63,7 @@ COMPILE_SCRIPT = """
 import logging, sys, uuid
 logging.basicConfig(level=logging.INFO, format="%(levelname)s:%(name)s:%(message)s")   # as the workflow scripts
 import ureterfsi.fsi  # noqa: F401
-from ureterfsi.study import configure_logging
+from ureterfsi.study.cli import configure_logging
 configure_logging(sys.stderr)
 if sys.argv[1] == "debug":
     logging.getLogger("distutils").setLevel(logging.DEBUG)

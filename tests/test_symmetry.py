@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ureterfsi import oneway
+from ureterfsi.study import oneway
 from ureterfsi.config import load_config_files
 from ureterfsi.mesh import build_mesh, mirror_mesh
-from ureterfsi.study import RunSpec
+from ureterfsi.study.options import RunSpec
 
 
 @pytest.fixture(scope="module")

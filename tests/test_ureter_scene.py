@@ -13,10 +13,12 @@ import pytest
 from ureterfsi.config import load_config_files
 from ureterfsi.mesh import build_mesh
 from ureterfsi.scenes.ureter import pulse_sigma, peristaltic_pressure
-from ureterfsi import ladder, oneway
+from ureterfsi import ladder
+from ureterfsi.study import oneway
 
 from _compare import assert_same_arithmetic
-from ureterfsi.study import RunSpec, run
+from ureterfsi.study.coupled import run
+from ureterfsi.study.options import RunSpec
 
 
 def _run(tmp_path, configs, model="3", level="coarse", symmetry="quarter", end=None, solve=run):

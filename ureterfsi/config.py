@@ -545,7 +545,7 @@ def check_stability(cfg):
     st = cfg.get("stability")
     if st is None:
         return
-    from ureterfsi.stability import Case
+    from ureterfsi.stability.cases import Case
 
     levels, models = cfg["mesh"]["levels"], cfg["models"]
     if st["level"] not in levels:
@@ -674,7 +674,7 @@ def read_run_config(path, model: str) -> dict:
 
 
 def wall_sections(cfg: dict) -> dict:
-    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.oneway.wall_history): a change
+    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
     re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
     return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
         k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {

@@ -361,25 +361,6 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
     raise KeyError(f"no design point uses wall motion {wall_id}")
 
 
-# ------------------------------------------------------------------------------------------ runs
-
-def solve_point(cfg: dict, study: Study, point: Point, mesh: str, out: str, checkpoint: str | None,
-                wall: str | None) -> None:
-    """One design point's solve on its rung (serial): ureterfsi.oneway.run on the shared wall motion, or
-    ureterfsi.study.run fully coupled."""
-    from .study import RunSpec
-
-    spec = RunSpec(study.model, study.level, study.symmetry, mesh)
-    if study.rung == "one_way":
-        from . import oneway
-
-        oneway.run(point.config, spec, out, checkpoint, wall_path=wall)
-    else:
-        from .study import run
-
-        run(point.config, spec, out, checkpoint)
-
-
 # ------------------------------------------------------------------------------------------ dataset
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
@@ -392,7 +373,7 @@ def _trapz(y: np.ndarray, t: np.ndarray) -> float:
 
 
 def point_scalars(run) -> dict:
-    """The scalars of one run dataset (ureterfsi.study.probes_dataset); hole flows per hole."""
+    """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
     q = run["outlet_flux"].values.astype(float)
     hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((t.size, 0))

@@ -114,7 +114,7 @@ def _static_tags(mesh, cell_tags):
 
 
 def coupled_parts(pb, stent, quantities, reference_pressure: float) -> list[Part]:
-    """Part `domain` of a fully coupled run (ureterfsi.study): the whole mesh; `stent` a CoupledStent or None;
+    """Part `domain` of a fully coupled run (ureterfsi.study.coupled): the whole mesh; `stent` a CoupledStent or None;
     the pressure is reference_pressure (Pa) off the urine (its dofs there are pinned to 0 by the solver)."""
     mesh, ct = pb.mesh, pb.scene.cell_tags
     gdim = mesh.geometry.dim

@@ -11,6 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# share of the full segment a mesh symmetry models (the r-z integrals carry the weight 2 pi r: the whole)
+SYMMETRY_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.25, "axisymmetric": 1.0}
+# share of each side hole inside the model: the planes x = 0 (half, quarter) cut the holes on the y axis
+HOLE_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.5}
+
 
 @dataclass(frozen=True)
 class Stricture:

@@ -17,11 +17,11 @@ import gmsh
 import numpy as np
 
 from ureterfsi import tags
-from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions, lumen_area, subdomain_volumes
+from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_positions, lumen_area,
+                                subdomain_volumes)
 from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
 from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
 
-SYMMETRY_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.25}
 # choice: away from a refined region the element size grows linearly to the bulk size over
 # (h_bulk - h) / GRADING (sizes at size factor 1): refinement confined to a thin layer around the holes,
 # the stent and the ureter wall.
@@ -47,7 +47,7 @@ def _request(cfg: dict, model: str, level: str, symmetry: str):
         raise ValueError(f"unknown model {model!r}; configured models: {sorted(cfg['models'])}")
     if level not in cfg["mesh"]["levels"]:
         raise ValueError(f"unknown mesh level {level!r}; configured levels: {list(cfg['mesh']['levels'])}")
-    if symmetry not in (*SYMMETRY_FRACTION, "axisymmetric"):
+    if symmetry not in SYMMETRY_FRACTION:
         raise ValueError(f"unknown symmetry {symmetry!r}; use full, half, quarter or axisymmetric")
     geom, sm = UreterGeometry.from_config(cfg), StentModel.from_config(cfg, model)
     if symmetry == "axisymmetric" and sm.stent:

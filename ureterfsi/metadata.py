@@ -23,7 +23,7 @@ SOURCE = "ureterfsi: monolithic ALE fluid-structure interaction with FEniCSx (do
 REFERENCES = ("Numerical study of fully coupled fluid-structure interaction of stented ureter by varying the "
               "stent side-holes (the study reproduced; text in shared/paper/stented-ureter-fsi.txt)")
 
-# name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.oneway), the study datasets
+# name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.study.oneway), the study datasets
 # (ureterfsi.aggregate) and the stability matrix (ureterfsi.stability)
 VARIABLES = {
     "time": ("s since 2000-01-01 00:00:00", "simulated time from the start of the run (the epoch is t = 0)"),

@@ -110,7 +110,7 @@ def ureter_scene(cfg: dict, mesh, cell_tags, facet_tags, axisymmetric: bool = Fa
 
 def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement, wall_velocity,
                        axisymmetric: bool = False, mesh_motion=None) -> Scene:
-    """The urine alone on the fluid part of a model's mesh (one-way rung, ureterfsi.oneway): the inner
+    """The urine alone on the fluid part of a model's mesh (one-way rung, ureterfsi.study.oneway): the inner
     ureter wall moves as prescribed (callables of (x, t)), the stent surfaces are held still, open
     inlet/outlet at the reference pressure (eq. 5), mesh fixed on the open faces, mirror planes / axis;
     mesh_motion: the ALE map over the whole urine domain (x, t), or None for the engine's extension."""

@@ -73,9 +73,9 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     from ..fsi.integrator import MeshInversion, StepFailure
     from ..geometry import UreterGeometry
     from ..mesh import build_mesh, load_mesh
-    from ..oneway import fluid_problem, wall_history
+    from ..study.oneway import fluid_problem, wall_history
     from ..scenes.ureter import pulse_centre, ureter_scene
-    from ..study import solver_options
+    from ..study.options import solver_options
     from .observer import StabilityObserver
 
     wall0 = _time.perf_counter()

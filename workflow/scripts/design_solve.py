@@ -1,14 +1,16 @@
-"""Snakemake script of rule `design_solve`: one design point on its study's rung (ureterfsi.designs.solve_point)."""
+"""Snakemake script of rule `design_solve`: one design point on its study's rung (ureterfsi.study.cli.solve)."""
 import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from ureterfsi.designs import solve_point, studies  # noqa: E402
-from ureterfsi.study import configure_logging  # noqa: E402
+from ureterfsi.designs import studies  # noqa: E402
+from ureterfsi.study.cli import configure_logging, solve  # noqa: E402
+from ureterfsi.study.options import RunSpec  # noqa: E402
 
 w = snakemake.wildcards  # noqa: F821
 study = studies(snakemake.config)[w.design_study]  # noqa: F821
 with open(snakemake.log[0], "w") as log:  # noqa: F821
     configure_logging(log)
-    solve_point(snakemake.config, study, study.point(w.point), snakemake.input.mesh, snakemake.output[0],  # noqa: F821
-                snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821
+    spec = RunSpec(study.model, study.level, study.symmetry, snakemake.input.mesh)  # noqa: F821
+    solve(study.point(w.point).config, spec, study.rung, snakemake.output[0],  # noqa: F821
+          snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821

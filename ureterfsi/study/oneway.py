@@ -1,6 +1,6 @@
 """One-way coupled rung of the fidelity ladder: wall -> urine -> stent (issue 5).
 
-The fully coupled model (ureterfsi.study) solves wall, urine and stent in one Newton system. This rung
+The fully coupled rung (ureterfsi.study.coupled) solves wall, urine and stent in one Newton system. This rung
 solves them in sequence, each with the engine's own physics blocks:
 
 1. **wall**: the ureter wall alone in the axisymmetric r-z formulation (exact for the wall of every
@@ -20,29 +20,40 @@ solves them in sequence, each with the engine's own physics blocks:
 """
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time as _time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import ufl
 import xarray as xr
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import tags
-from .fsi import Observer, physics
-from .fsi.operators import Operators
-from .fsi.problem import MonolithicFSI, dirichlet_bcs
-from .fsi.scene import DirichletCondition
-from .fsi.submesh import SubDomain
-from .probes import CellField, PointProbe, von_mises
-from .checked_io import BadFile, Contract, open_netcdf
-from .config import wall_sections
-from .provenance import config_hash
+from .. import tags
+from ..calibration import INNER, OUTER, WallModel
+from ..fields import oneway_parts
+from ..fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings, physics
+from ..fsi.operators import Operators
+from ..fsi.problem import MonolithicFSI, dirichlet_bcs
+from ..fsi.scene import DirichletCondition
+from ..fsi.submesh import SubDomain, extract
+from ..geometry import StentModel, UreterGeometry
+from ..probes import CellField, PointProbe, von_mises
+from ..checked_io import BadFile, Contract, open_netcdf
+from ..config import wall_sections
+from ..metadata import write_netcdf
+from ..provenance import config_hash, provenance_attrs
+from ..scenes.ureter import materials, ureter_fluid_scene
+from . import pipeline
+from .options import RunSpec, solver_options
+from .probes import N_LINE, UreterProbes
 
-log = logging.getLogger("ureterfsi.oneway")
+log = logging.getLogger("ureterfsi.study.oneway")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -90,8 +101,6 @@ class WallHistory:
     def to_dataset(self, cfg: dict) -> xr.Dataset:
         """CF-annotated dataset of the recorded motion, with provenance and the hash of the configuration
         sections the wall solve reads (`wall_config_hash`, checked by from_dataset)."""
-        from .provenance import provenance_attrs
-
         def var(dims, data, units, long_name):
             return (dims, np.asarray(data), {"units": units, "long_name": long_name})
 
@@ -136,8 +145,6 @@ class _SurfaceRecorder(Observer):
     """Observer of the r-z wall solve: inner/outer surface displacement and velocity each step."""
 
     def __init__(self, model):
-        from .calibration import INNER, OUTER
-
         pb = model.problem
         self.pb = pb
         self.U, self.umap = pb.sub("displacement").collapse()
@@ -175,9 +182,6 @@ class _SurfaceRecorder(Observer):
 
 def wall_history(cfg: dict, end: float, dt: float, nr: int = 4) -> WallHistory:
     """Transient r-z wall-alone solve over [0, end] with step dt (from rest, load ramped)."""
-    from .calibration import WallModel
-    from .fsi import SolverOptions, TimeIntegrator, TimeSettings
-
     t0 = _time.perf_counter()
     model = WallModel(cfg, nr=nr, travelling=True,
                       options=SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25,
@@ -249,13 +253,6 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
     """(problem, fluid submesh): the urine alone on the fluid part of the mesh, ALE, the recorded
     inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung): the
     radial blend (`solver.one_way_mesh_motion: algebraic`) or the extension problem (`extension`)."""
-    import dataclasses
-
-    from .fsi.submesh import extract
-    from .geometry import UreterGeometry
-    from .scenes.ureter import ureter_fluid_scene
-    from .study import solver_options
-
     fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
     u_wall, v_wall = inner_wall_motion(history, axisymmetric)
     blend = None
@@ -358,32 +355,15 @@ def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
     """Step 1 of the rung as a job of its own: the wall over [0, time.end] in steps of time.dt, written
     atomically. Every one-way run of the study reads it (their wall is the same: geometry and load do not
     depend on the stent model or the 3D mesh)."""
-    from .metadata import write_netcdf
-
     ds = wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"]).to_dataset(cfg)
     write_netcdf(ds, out_path)
     return ds
 
 
-def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall_path: str | None = None):
-    """One-way solve of one model on one mesh (serial); writes the same probe dataset as the fully
-    coupled run (ureterfsi.study.run), with fidelity "one_way" and the one-way diagnostics. wall_path: a
-    wall_motion dataset (write_wall_motion) to read instead of solving the wall."""
-    from mpi4py import MPI
-
-    from .fields import field_writer, oneway_parts
-    from .fsi.submesh import extract
-    from .geometry import StentModel, UreterGeometry
-    from .mesh import load_mesh
-    from .metadata import write_netcdf
-    from .scenes.ureter import materials
-    from .study import N_LINE, UreterProbes, integrate_from_rest, probes_dataset, time_settings
-
-    wall0 = _time.perf_counter()
-    comm = MPI.COMM_WORLD
-    if comm.size > 1:
-        raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
-    settings = time_settings(cfg, spec, checkpoint_path, "one_way", wall_path)
+def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings, mesh, cell_tags,
+         facet_tags) -> pipeline.Posed:
+    """The rung on the run's mesh: the wall motion (read from `wall_path`, or solved), the urine alone on the
+    fluid submesh, the quasi-static stent on the stent submesh, the probes and the one-way diagnostics."""
     if wall_path:
         history = WallHistory.from_dataset(open_netcdf(wall_path, WALL_MOTION), cfg, settings.end, settings.dt)
         log.info("wall (r-z) motion read from %s (%d steps, solved in %.1f s)", wall_path, len(history.time) - 1,
@@ -392,7 +372,6 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
         history = wall_history(cfg, settings.end, settings.dt)
 
     axisymmetric = spec.symmetry == "axisymmetric"
-    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
     pb, fluid = fluid_problem(cfg, mesh, cell_tags, facet_tags, history, axisymmetric)
 
     g = UreterGeometry.from_config(cfg)
@@ -403,47 +382,47 @@ def run(cfg: dict, spec, out_path: str, checkpoint_path: str | None = None, wall
         _, _, stent_material = materials(cfg)
         stent = QuasiStaticStent(extract(mesh, cell_tags, facet_tags, [tags.STENT]), stent_material, pb,
                                  spec.symmetry != "full", np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
-    ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
-    ncells = mesh.topology.index_map(mesh.topology.dim).size_global
-    log.info("one-way model %s, mesh %s (%s): %d cells (%d fluid), %d fluid dofs, setup %.1f s", spec.model,
-             spec.level, spec.symmetry, ncells, fluid.mesh.topology.index_map(fluid.mesh.topology.dim).size_global,
-             ndofs, _time.perf_counter() - wall0)
     obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
                        stent=stent)
     diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)
-    fields = field_writer(cfg, out_path, lambda q: oneway_parts(pb, stent, q), settings.end, comm)
-    integrator = integrate_from_rest(pb, settings, [obs, diag] + ([fields] if fields else []),
-                                     cfg["fluid"]["reference_pressure"])
-    records = integrator.records
-    field_attrs = fields.finish(out_path) if fields else {}
-    wall = _time.perf_counter() - wall0
-    extra = field_attrs | {
-        "cells": ncells, "dofs": ndofs, "processes": 1, "wall_time_s": round(wall, 2),
-        "time_step_s": settings.dt, "end_time_s": settings.end,
-        "solver": (f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
-                   f"P2-P1, {pb.mesh_motion_solver} mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
-                   f"quasi-static linear stent (LU once)"),
-        "timings": {k: round(v, 2) for k, v in pb.timings.items()},
-        "counters": dict(pb.counters),
-        # the wall's solve time, in this run or in the shared wall_motion job (wall_motion_file)
-        "wall_solve_time_s": round(history.wall_time, 2),
-        "wall_motion_file": str(wall_path or ""),
-        "one_way_mesh_motion": cfg["solver"]["one_way_mesh_motion"],
-        "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
-        "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
-        "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
-    }
-    if stent is not None:
-        extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,
-                     one_way_hole_diameter=g.hole_radius * 2, stent_solve_time_s=round(stent.wall_time, 2))
-    ds = probes_dataset(obs, records, cfg, spec, extra, fidelity="one_way")
-    write_netcdf(ds, out_path)
-    integrator.remove_checkpoint()
-    log.info("done in %.1f s -> %s (max |p - p_ref| on the wall %.1f Pa vs load %.0f Pa%s)", wall, out_path,
-             diag.max_wall_pressure_deviation, cfg["peristalsis"]["peak_traction"],
-             f"; max stent displacement {diag.max_stent_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
-             if stent is not None else "")
-    return ds
+
+    def attrs() -> dict:
+        extra = {
+            # the wall's solve time, in this run or in the shared wall_motion job (wall_motion_file)
+            "wall_solve_time_s": round(history.wall_time, 2),
+            "wall_motion_file": str(wall_path or ""),
+            "one_way_mesh_motion": cfg["solver"]["one_way_mesh_motion"],
+            "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
+            "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
+            "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
+        }
+        if stent is not None:
+            extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,
+                         one_way_hole_diameter=g.hole_radius * 2, stent_solve_time_s=round(stent.wall_time, 2))
+        return extra
+
+    def summary() -> str:
+        return (f" (max |p - p_ref| on the wall {diag.max_wall_pressure_deviation:.1f} Pa vs load "
+                f"{cfg['peristalsis']['peak_traction']:.0f} Pa"
+                + (f"; max stent displacement {diag.max_stent_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
+                   if stent is not None else "") + ")")
+
+    return pipeline.Posed(
+        pb, obs, lambda q: oneway_parts(pb, stent, q),
+        solver=(f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
+                f"P2-P1, {pb.mesh_motion_solver} mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
+                f"quasi-static linear stent (LU once)"),
+        observers=[diag], attrs=attrs, summary=summary,
+        description=f" ({fluid.mesh.topology.index_map(fluid.mesh.topology.dim).size_global} fluid)")
+
+
+def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = None, wall_path: str | None = None):
+    """One-way solve of one model on one mesh (serial); writes the same probe dataset as the fully
+    coupled run (ureterfsi.study.coupled.run), with fidelity "one_way" and the one-way diagnostics. wall_path: a
+    wall_motion dataset (write_wall_motion) to read instead of solving the wall."""
+    if MPI.COMM_WORLD.size > 1:
+        raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
+    return pipeline.run(cfg, spec, out_path, checkpoint_path, "one_way", partial(pose, cfg, spec, wall_path), wall_path)
 
 
 class OneWayDiagnostics(Observer):

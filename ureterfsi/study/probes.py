@@ -1,4 +1,4 @@
-"""One run of the ureter study: mesh + configuration -> fully coupled solve -> probe dataset (netCDF).
+"""The study's probes of a ureter run and its probe dataset (netCDF).
 
 Probes (paper §3, Figs. 3-10, and beyond):
   every step   outlet/inlet volumetric flux, mean axial outlet velocity (the paper's measure), maximum
@@ -11,11 +11,6 @@ Every variable carries CF `units` and `long_name`; the dataset carries provenanc
 """
 from __future__ import annotations
 
-import json
-import logging
-import time as _time
-from dataclasses import dataclass
-
 import numpy as np
 import ufl
 import xarray as xr
@@ -24,47 +19,18 @@ from dolfinx.fem import petsc as fem_petsc
 from dolfinx.mesh import compute_midpoints
 from mpi4py import MPI
 
-from . import tags
-from .config import run_sections
-from .fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
-from .fsi import physics
-from .fsi.problem import MonolithicFSI
-from .fields import coupled_parts, field_writer
-from .geometry import StentModel, UreterGeometry, hole_pair_positions
-from .probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, inside_radius, von_mises
-from .metadata import cf_meta, write_netcdf
-from .provenance import provenance_attrs
-from .scenes.ureter import pulse_centre, ureter_scene
+from .. import tags
+from ..fsi import Observer
+from ..fsi import physics
+from ..fsi.problem import MonolithicFSI
+from ..geometry import HOLE_FRACTION, SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_positions
+from ..metadata import cf_meta
+from ..probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, inside_radius, von_mises
+from ..provenance import provenance_attrs
+from ..scenes.ureter import pulse_centre
+from .options import RunSpec
 
-log = logging.getLogger("ureterfsi.study")
-
-FIDELITIES = ("fully_coupled", "one_way")   # rungs of the fidelity ladder a run can use
-HOLE_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.5}   # share of each hole inside the model
 N_LINE, N_HOLE = 201, 21
-
-
-@dataclass
-class RunSpec:
-    model: str
-    level: str
-    symmetry: str
-    mesh_path: str
-    end: float | None = None       # override of time.end (short test runs)
-    dt: float | None = None        # override of time.dt
-
-
-def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
-    """The engine's options from `solver`; `fully_coupled`: the fully coupled rung's solve, whose linear solver is
-    `solver.fully_coupled_linear_solver`."""
-    s = cfg["solver"]
-    return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
-                         newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
-                         newton_max_iterations=s["newton_max_iterations"], predictor=s["predictor"],
-                         linear_solver=s["fully_coupled_linear_solver"] if fully_coupled else s["linear_solver"],
-                         reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
-                         mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
-                         krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
-                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"])
 
 
 class CoupledWall:
@@ -105,7 +71,7 @@ class UreterProbes(Observer):
 
     The fluid quantities come from the problem `pb` (fully coupled, or the fluid alone on its part of
     the mesh); the outer-wall displacement and the stent stress from `wall` and `stent` providers
-    (default: read from the coupled state; the one-way rung passes its own, see ureterfsi.oneway).
+    (default: read from the coupled state; the one-way rung passes its own, see ureterfsi.study.oneway).
     """
 
     def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times,
@@ -130,7 +96,7 @@ class UreterProbes(Observer):
                                                        * ops.weight * ds(tags.OUTLET)),
         }
         self.comm = comm
-        self.fraction = {"full": 1.0, "half": 2.0, "quarter": 4.0, "axisymmetric": 1.0}[symmetry]
+        self.fraction = 1.0 / SYMMETRY_FRACTION[symmetry]
 
         z = np.linspace(0.0, g.length, N_LINE)
         self.z = z
@@ -285,179 +251,3 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi probes, model {spec.model}, mesh {spec.level} ({spec.symmetry})"
     return ds
-
-
-def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",
-                  wall_path: str | None = None) -> TimeSettings:
-    """Time stepping of a run: config `time` with the run's end/dt overrides, checkpoints if a path is given
-    (bound to the run's identity, run_identity)."""
-    tcfg = cfg["time"]
-    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"], output_times=tcfg["probe_times"],
-                            max_halvings=cfg["solver"]["max_step_halvings"],
-                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
-                            checkpoint_path=checkpoint_path)
-    if checkpoint_path:
-        settings.identity = run_identity(cfg, spec, fidelity, settings.end, settings.dt, wall_path)
-    return settings
-
-
-def _flatten(prefix: str, value, out: dict) -> None:
-    if isinstance(value, dict):
-        for k, v in value.items():
-            _flatten(f"{prefix}.{k}" if prefix else str(k), v, out)
-    else:
-        out[prefix] = json.dumps(value, sort_keys=True)
-
-
-def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float, wall_path: str | None = None) -> dict:
-    """What determines a run, component -> value (TimeSettings.identity): every key of the configuration
-    sections it reads (ureterfsi.config.run_sections), the run's model, mesh level, symmetry, fidelity,
-    end and dt, the SHA-256 of the mesh file (and of the wall-motion file of a one-way run), and the
-    versions of ureterfsi and dolfinx."""
-    import dolfinx
-
-    from . import __version__
-    from .checked_io import sha256_file
-
-    out: dict = {}
-    sections = run_sections(cfg, spec.model)
-    _flatten(f"models.{spec.model}", sections.pop("model"), out)
-    _flatten("", sections, out)
-    out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,
-                "run.fidelity": fidelity, "run.end": repr(float(end)), "run.dt": repr(float(dt)),
-                "mesh_sha256": sha256_file(spec.mesh_path),
-                "version.ureterfsi": __version__, "version.dolfinx": dolfinx.__version__})
-    if wall_path:
-        out["wall_motion_sha256"] = sha256_file(wall_path)
-    return out
-
-
-def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers,
-                        reference_pressure: float) -> TimeIntegrator:
-    """Urine at rest at the reference pressure (steady solve, paper §2.4), then time steps to the end;
-    a run with a checkpoint resumes from it instead. The integrator holds the step records; remove its
-    checkpoint once the run's output is written."""
-    integrator = TimeIntegrator(pb, settings, observers)
-    if not integrator.has_checkpoint():
-        # Newton starts from p = p_ref: for the urine alone (walls at rest) that is the solution, so the
-        # steady solve ends after one residual (no Jacobian, no factorisation)
-        pb.fill("pressure", reference_pressure)
-        its, hist = pb.solve_steady()
-        log.info("initial state: urine at rest at the reference pressure, %d Newton iterations, residual %.2e",
-                 its, hist[-1])
-    integrator.run()
-    return integrator
-
-
-def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = None) -> xr.Dataset:
-    """Fully coupled solve of one model on one mesh; writes the probe dataset atomically."""
-    from mpi4py import MPI as _MPI
-
-    from .mesh import load_mesh
-
-    wall0 = _time.perf_counter()
-    comm = _MPI.COMM_WORLD
-    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
-    scene = ureter_scene(cfg, mesh, cell_tags, facet_tags, axisymmetric=spec.symmetry == "axisymmetric")
-    pb = MonolithicFSI(scene, solver_options(cfg, fully_coupled=True))
-    ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs
-    ncells = mesh.topology.index_map(mesh.topology.dim).size_global
-    log.info("model %s, mesh %s (%s): %d cells, %d dofs, %d processes, setup %.1f s", spec.model, spec.level,
-             spec.symmetry, ncells, ndofs, comm.size, _time.perf_counter() - wall0)
-    settings = time_settings(cfg, spec, checkpoint_path)
-    obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
-    fields = field_writer(cfg, out_path, lambda q: coupled_parts(pb, obs.stent if obs.has_stent else None, q,
-                                                                 cfg["fluid"]["reference_pressure"]),
-                          settings.end, comm)
-    integrator = integrate_from_rest(pb, settings, [obs] + ([fields] if fields else []),
-                                     cfg["fluid"]["reference_pressure"])
-    records = integrator.records
-    field_attrs = fields.finish(out_path) if fields else {}
-    wall = _time.perf_counter() - wall0
-    ds = probes_dataset(obs, records, cfg, spec, field_attrs | {
-        "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
-        "time_step_s": settings.dt, "end_time_s": settings.end,
-        "solver": f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {pb.options.linear_solver}",
-        "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)})
-    if comm.rank == 0:
-        write_netcdf(ds, out_path)
-    comm.Barrier()
-    integrator.remove_checkpoint()
-    log.info("done in %.1f s -> %s", wall, out_path)
-    return ds
-
-
-def configure_logging(stream=None) -> None:
-    """Progress lines of the engine and the study on rank 0 (warnings from every rank)."""
-    from mpi4py import MPI as _MPI
-
-    rank = _MPI.COMM_WORLD.rank
-    handler = logging.StreamHandler(stream)
-    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s: %(message)s", "%H:%M:%S"))
-    for name in ("ureterfsi",):
-        lg = logging.getLogger(name)
-        lg.handlers[:] = [handler]
-        lg.setLevel(logging.INFO if rank == 0 else logging.WARNING)
-        lg.propagate = False
-
-
-def main(argv=None) -> int:
-    import argparse
-    import sys
-
-    from mpi4py import MPI as _MPI
-
-    from .checked_io import BadFile
-    from .config import ConfigError, load_config, load_config_files, run_config
-    from .fsi import SolveFailure
-
-    ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
-                                 description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
-    ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
-    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON")
-    ap.add_argument("--run-config", default=None,
-                    help="the sections this solve reads as JSON (ureterfsi.config.run_sections; rule solve)")
-    ap.add_argument("--model", required=True)
-    ap.add_argument("--level", required=True)
-    ap.add_argument("--symmetry", required=True)
-    ap.add_argument("--mesh", required=True, help="gmsh .msh file of the model")
-    ap.add_argument("--out", required=True, help="netCDF output")
-    ap.add_argument("--checkpoint", default=None, help="checkpoint path (resumes if present)")
-    ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
-    ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
-    ap.add_argument("--wall", default=None,
-                    help="one_way: the wall-motion dataset to read (rule wall_motion, ureterfsi.oneway.write_wall_motion) "
-                         "instead of solving the wall")
-    ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
-                    help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, ureterfsi.oneway)")
-    args = ap.parse_args(argv)
-    configure_logging()
-    try:
-        if args.run_config:
-            with open(args.run_config) as fh:
-                cfg = run_config(json.load(fh), args.model)
-        elif args.config_json:
-            with open(args.config_json) as fh:
-                cfg = load_config(json.load(fh))
-        else:
-            cfg = load_config_files(args.config)
-    except ConfigError as err:
-        print(err, file=sys.stderr)
-        return 2
-    spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt)
-    try:
-        if args.fidelity == "one_way":
-            from . import oneway
-
-            oneway.run(cfg, spec, args.out, args.checkpoint, wall_path=args.wall)
-        else:
-            run(cfg, spec, args.out, args.checkpoint)
-    except (BadFile, SolveFailure) as err:
-        if _MPI.COMM_WORLD.rank == 0:
-            print(err, file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

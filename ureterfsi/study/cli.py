@@ -1,0 +1,81 @@
+"""The command line of a study run, every rung: `python -m ureterfsi.study --model M --level L --symmetry S
+--mesh F --out F [--fidelity one_way --wall F]` (rules solve, ladder_run), and the rung dispatch."""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+import xarray as xr
+from mpi4py import MPI
+
+from ..checked_io import BadFile
+from ..config import ConfigError, load_config, load_config_files, read_run_config
+from ..fsi import SolveFailure
+from . import coupled, oneway
+from .options import FIDELITIES, RunSpec
+
+
+def solve(cfg: dict, spec: RunSpec, fidelity: str, out_path: str, checkpoint_path: str | None = None,
+          wall_path: str | None = None) -> xr.Dataset:
+    """One run on rung `fidelity` (FIDELITIES); the one-way rung reads the wall motion `wall_path` if given."""
+    if fidelity == "one_way":
+        return oneway.run(cfg, spec, out_path, checkpoint_path, wall_path=wall_path)
+    return coupled.run(cfg, spec, out_path, checkpoint_path)
+
+
+def configure_logging(stream=None) -> None:
+    """Progress lines of the engine and the study on rank 0 (warnings from every rank)."""
+    rank = MPI.COMM_WORLD.rank
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s: %(message)s", "%H:%M:%S"))
+    for name in ("ureterfsi",):
+        lg = logging.getLogger(name)
+        lg.handlers[:] = [handler]
+        lg.setLevel(logging.INFO if rank == 0 else logging.WARNING)
+        lg.propagate = False
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
+                                 description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
+    ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
+    ap.add_argument("--config-json", default=None, help="the whole configuration as JSON")
+    ap.add_argument("--run-config", default=None,
+                    help="the sections this solve reads as JSON (ureterfsi.config.run_sections; rule solve)")
+    ap.add_argument("--model", required=True)
+    ap.add_argument("--level", required=True)
+    ap.add_argument("--symmetry", required=True)
+    ap.add_argument("--mesh", required=True, help="gmsh .msh file of the model")
+    ap.add_argument("--out", required=True, help="netCDF output")
+    ap.add_argument("--checkpoint", default=None, help="checkpoint path (resumes if present)")
+    ap.add_argument("--end", type=float, default=None, help="override time.end (s)")
+    ap.add_argument("--dt", type=float, default=None, help="override time.dt (s)")
+    ap.add_argument("--wall", default=None,
+                    help="one_way: the wall-motion dataset to read (rule wall_motion, "
+                         "ureterfsi.study.oneway.write_wall_motion) instead of solving the wall")
+    ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
+                    help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, "
+                         "ureterfsi.study.oneway)")
+    args = ap.parse_args(argv)
+    configure_logging()
+    try:
+        if args.run_config:
+            cfg = read_run_config(args.run_config, args.model)
+        elif args.config_json:
+            with open(args.config_json) as fh:
+                cfg = load_config(json.load(fh))
+        else:
+            cfg = load_config_files(args.config)
+    except ConfigError as err:
+        print(err, file=sys.stderr)
+        return 2
+    spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt)
+    try:
+        solve(cfg, spec, args.fidelity, args.out, args.checkpoint, args.wall)
+    except (BadFile, SolveFailure) as err:
+        if MPI.COMM_WORLD.rank == 0:
+            print(err, file=sys.stderr)
+        return 1
+    return 0

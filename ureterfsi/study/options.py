@@ -1,0 +1,80 @@
+"""The configuration of one run as the engine's options: what a run is (RunSpec), its solver options and its
+time stepping, with the identity a checkpoint is bound to."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+import dolfinx
+
+from .. import __version__
+from ..checked_io import sha256_file
+from ..config import run_sections
+from ..fsi import SolverOptions, TimeSettings
+
+FIDELITIES = ("fully_coupled", "one_way")   # rungs of the fidelity ladder a run can use
+
+
+@dataclass
+class RunSpec:
+    model: str
+    level: str
+    symmetry: str
+    mesh_path: str
+    end: float | None = None       # override of time.end (short test runs)
+    dt: float | None = None        # override of time.dt
+
+
+def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
+    """The engine's options from `solver`; `fully_coupled`: the fully coupled rung's solve, whose linear solver is
+    `solver.fully_coupled_linear_solver`."""
+    s = cfg["solver"]
+    return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
+                         newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
+                         newton_max_iterations=s["newton_max_iterations"], predictor=s["predictor"],
+                         linear_solver=s["fully_coupled_linear_solver"] if fully_coupled else s["linear_solver"],
+                         reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
+                         mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
+                         krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
+                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"])
+
+
+def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",
+                  wall_path: str | None = None) -> TimeSettings:
+    """Time stepping of a run: config `time` with the run's end/dt overrides, checkpoints if a path is given
+    (bound to the run's identity, run_identity)."""
+    tcfg = cfg["time"]
+    settings = TimeSettings(end=spec.end or tcfg["end"], dt=spec.dt or tcfg["dt"], output_times=tcfg["probe_times"],
+                            max_halvings=cfg["solver"]["max_step_halvings"],
+                            checkpoint_interval=tcfg["checkpoint_interval"] if checkpoint_path else 0,
+                            checkpoint_path=checkpoint_path)
+    if checkpoint_path:
+        settings.identity = run_identity(cfg, spec, fidelity, settings.end, settings.dt, wall_path)
+    return settings
+
+
+def _flatten(prefix: str, value, out: dict) -> None:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), v, out)
+    else:
+        out[prefix] = json.dumps(value, sort_keys=True)
+
+
+
+def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float, wall_path: str | None = None) -> dict:
+    """What determines a run, component -> value (TimeSettings.identity): every key of the configuration
+    sections it reads (ureterfsi.config.run_sections), the run's model, mesh level, symmetry, fidelity,
+    end and dt, the SHA-256 of the mesh file (and of the wall-motion file of a one-way run), and the
+    versions of ureterfsi and dolfinx."""
+    out: dict = {}
+    sections = run_sections(cfg, spec.model)
+    _flatten(f"models.{spec.model}", sections.pop("model"), out)
+    _flatten("", sections, out)
+    out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,
+                "run.fidelity": fidelity, "run.end": repr(float(end)), "run.dt": repr(float(dt)),
+                "mesh_sha256": sha256_file(spec.mesh_path),
+                "version.ureterfsi": __version__, "version.dolfinx": dolfinx.__version__})
+    if wall_path:
+        out["wall_motion_sha256"] = sha256_file(wall_path)
+    return out
