@@ -177,7 +177,7 @@ def test_the_fully_coupled_rung_reads_its_own_linear_solver():
     from pathlib import Path
 
     from ureterfsi.config import load_config_files
-    from ureterfsi.study import solver_options
+    from ureterfsi.study.options import solver_options
     cfg = load_config_files([str(Path(__file__).resolve().parents[1] / "config/config.yaml")])
     cfg["solver"] |= {"linear_solver": "mumps", "fully_coupled_linear_solver": "block_gauss_seidel",
                       "krylov_forcing": "eisenstat_walker"}
