@@ -540,12 +540,6 @@ class TransientResult:
     min_ale_jacobian: float
     series: dict
 
-    def statistics(self, t_from: float | None = None, periods: int = 1) -> dict:
-        """{quantity: (mean, amplitude, frequency)} of the series from t_from on (periodic_stats)."""
-        s = self.series
-        keep = s["time"] >= (t_from if t_from is not None else 0.0)
-        return {k: periodic_stats(s["time"][keep], s[k][keep], periods) for k in ("ux_A", "uy_A", "drag", "lift")}
-
 
 CASES = {"FSI2": FSI2(), "FSI3": FSI3()}
 # choice: MUMPS workspace margin (ICNTL(14), percent over its estimate); the default 20 % fails (INFOG(1) = -9)
