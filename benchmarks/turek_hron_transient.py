@@ -72,6 +72,8 @@ def main(argv=None):
     ap.add_argument("--start", choices=("rest", "steady"), default="rest")
     ap.add_argument("--kick", type=float, nargs=2, default=(10.0, 0.05), metavar=("ACCEL", "DURATION"),
                     help="--start steady: upward push on the flag [m/s^2] over [s]")
+    ap.add_argument("--mesh-motion", choices=("harmonic", "elastic"), default="harmonic")
+    ap.add_argument("--mesh-stiffening", type=float, default=1.0, help="exponent q of (V_mean/V_cell)^q")
     ap.add_argument("--window", type=float, help="statistics over the last WINDOW seconds")
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--json", help="write series and cost here")
@@ -84,12 +86,14 @@ def main(argv=None):
         case = run["case"] if run else args.case
     else:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
+        options = th.SolverOptions(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening)
         res = th.run_transient(args.case, args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
-                               series_path=args.json)
+                               options=options, series_path=args.json)
         case, series = args.case, {k: v.tolist() for k, v in res.series.items()}
-        run = {k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
-                                            "setup_time", "wall_time", "steps", "newton_iterations",
-                                            "reduced_steps", "min_ale_jacobian")}
+        run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening}
+        run.update({k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
+                                                 "setup_time", "wall_time", "steps", "newton_iterations",
+                                                 "reduced_steps", "min_ale_jacobian")})
         if args.json and comm.rank == 0:
             Path(args.json).write_text(json.dumps({"run": run, "series": series}) + "\n")
     if comm.rank != 0:
