@@ -1,12 +1,14 @@
-"""Turek-Hron FSI1 benchmark (Turek & Hron 2006, "Proposal for numerical benchmarking of
-fluid-structure interaction between an elastic object and laminar incompressible flow") as a scene
-of the generic engine: a steady verification of the monolithic ALE coupling.
+"""Turek-Hron FSI benchmarks (Turek & Hron 2006, "Proposal for numerical benchmarking of
+fluid-structure interaction between an elastic object and laminar incompressible flow") as scenes
+of the generic engine: the steady FSI1 and the periodic FSI2 and FSI3 verify the monolithic ALE coupling.
 
 Geometry (SI): channel [0, 2.5] x [0, 0.41]; rigid cylinder of radius 0.05 centred at (0.2, 0.2);
 elastic flag of thickness 0.02 clamped on the cylinder's downstream side, right end at x = 0.6,
 y in [0.19, 0.21]; point A = (0.6, 0.2) at the middle of the flag tip.
 FSI1: rho_f = 1e3, nu_f = 1e-3, rho_s = 1e3, nu_s = 0.4, mu_s = 0.5e6 (St Venant-Kirchhoff),
 mean inflow U = 0.2 (Re = 20); steady state.
+FSI2: rho_s = 1e4, mu_s = 0.5e6, U = 1 (Re = 100); FSI3: rho_s = 1e3, mu_s = 2e6, U = 2 (Re = 200); the
+inflow ramped by (1 - cos(pi t / 2)) / 2 for t < 2 s; periodic regime (mean, amplitude, frequency).
 
 Quantities: displacement of A, drag and lift on the whole obstacle (cylinder + flag) from the fluid
 stress, by default as the variational (residual) force F_i = -R_fluid(v, p, u; phi_i), with phi_i = e_i
@@ -16,6 +18,7 @@ cross-check the boundary integral of the fluid traction.
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 import tempfile
@@ -27,10 +30,13 @@ import numpy as np
 import ufl
 from dolfinx import fem, geometry
 from mpi4py import MPI
+from petsc4py import PETSc
 
-from ureterfsi.fsi import (DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI, NewtonDivergence,
-                           NewtonianFluid, OpenBoundary, Scene, SolidRegion, SolverOptions)
+from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI,
+                           NewtonDivergence, NewtonianFluid, Observer, OpenBoundary, Scene, SolidRegion, SolverOptions,
+                           TimeIntegrator, TimeSettings)
 from ureterfsi.fsi import physics
+from ureterfsi.provenance import atomic_path
 
 
 # --- geometry and tags --------------------------------------------------------------------------
@@ -84,8 +90,30 @@ class FSI1:
                              density=self.rho_s, kinematics="st_venant_kirchhoff")
 
 
+@dataclass(frozen=True)
+class FSI2(FSI1):
+    rho_s: float = 1.0e4
+    mu_s: float = 0.5e6
+    mean_inflow: float = 1.0
+
+
+@dataclass(frozen=True)
+class FSI3(FSI1):
+    rho_s: float = 1.0e3
+    mu_s: float = 2.0e6
+    mean_inflow: float = 2.0
+
+
 # Turek & Hron 2006, Table "FSI1" (finest level)
 REFERENCE_FSI1 = {"ux_A": 0.0227e-3, "uy_A": 0.8209e-3, "drag": 14.295, "lift": 0.7638}
+# Turek & Hron 2006, FSI2 and FSI3 (finest level): (mean, amplitude, frequency [Hz]) of the periodic regime, SI
+REFERENCE_TRANSIENT = {
+    "FSI2": {"ux_A": (-14.58e-3, 12.44e-3, 3.8), "uy_A": (1.23e-3, 80.6e-3, 2.0),
+             "drag": (208.83, 73.75, 3.8), "lift": (0.88, 234.2, 2.0)},
+    "FSI3": {"ux_A": (-2.69e-3, 2.53e-3, 10.9), "uy_A": (1.48e-3, 34.38e-3, 5.3),
+             "drag": (457.3, 22.66, 10.9), "lift": (2.22, 149.78, 5.3)},
+}
+RAMP_TIME = 2.0          # s, the benchmark's inflow ramp
 
 # choice: element sizes at refinement 1: H_NEAR on the cylinder and the flag boundary, growing
 # linearly to H_FAR at distance SIZE_DISTANCE; sizes scale with 1/refinement.
@@ -225,20 +253,28 @@ def build_mesh(refinement: float = 1.0, comm=MPI.COMM_WORLD, cache_dir=None):
 # --- scene ----------------------------------------------------------------------------------------
 @dataclass
 class ParabolicInflow:
-    """v(0, y) = amplitude * 1.5 U y (H - y) / (H/2)^2 e_x; `amplitude` is mutable (continuation)."""
+    """v(0, y) = amplitude * r(t) * 1.5 U y (H - y) / (H/2)^2 e_x; `amplitude` is mutable (continuation);
+    r(t) = (1 - cos(pi t / T)) / 2 for t < T = ramp_time, else 1 (no ramp if ramp_time = 0)."""
     mean_velocity: float
     height: float = GEOMETRY.height
     amplitude: float = 1.0
+    ramp_time: float = 0.0
+
+    def ramp(self, t) -> float:
+        if t >= self.ramp_time:
+            return 1.0
+        return 0.5 * (1.0 - math.cos(math.pi * t / self.ramp_time))
 
     def __call__(self, x, t):
         H = self.height
-        vx = self.amplitude * 1.5 * self.mean_velocity * x[1] * (H - x[1]) / (0.5 * H) ** 2
+        vx = self.amplitude * self.ramp(t) * 1.5 * self.mean_velocity * x[1] * (H - x[1]) / (0.5 * H) ** 2
         return np.vstack([vx, np.zeros_like(vx)])
 
 
-def make_scene(mesh, cell_tags, facet_tags, params: FSI1 = FSI1(), tags: Tags = TAGS, backflow: float = 0.0):
-    """The FSI1 scene on a tagged mesh. Returns (scene, inflow); inflow.amplitude scales the inlet."""
-    inflow = ParabolicInflow(params.mean_inflow)
+def make_scene(mesh, cell_tags, facet_tags, params: FSI1 = FSI1(), tags: Tags = TAGS, backflow: float = 0.0,
+               ramp_time: float = 0.0, body_forces=()):
+    """The scene of `params` on a tagged mesh. Returns (scene, inflow); inflow.amplitude scales the inlet."""
+    inflow = ParabolicInflow(params.mean_inflow, ramp_time=ramp_time)
     fixed = [tags.inlet, tags.outlet, tags.walls, tags.cylinder, tags.clamp]
     scene = Scene(
         mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags,
@@ -248,7 +284,7 @@ def make_scene(mesh, cell_tags, facet_tags, params: FSI1 = FSI1(), tags: Tags = 
         dirichlet=[DirichletCondition("velocity", [tags.inlet], inflow),
                    DirichletCondition("velocity", [tags.walls, tags.cylinder, tags.clamp]),
                    DirichletCondition("displacement", fixed)],
-        name="turek_hron_fsi1")
+        body_forces=list(body_forces), name=f"turek_hron_{type(params).__name__.lower()}")
     return scene, inflow
 
 
@@ -282,16 +318,8 @@ class ObstacleForces:
         ops = pb.ops
         fdim = mesh.topology.dim - 1
 
-        def parts(f):
-            s = ufl.split(f)
-            return {name: s[i] for i, name in enumerate(pb.field_names)}
-
-        X, Xn, Xnm1 = parts(pb.x), parts(pb.x_n), parts(pb.x_nm1)
-        b0, b1, b2 = pb.bdf
-
-        def ddt(name):
-            return (b0 * X[name] + b1 * Xn[name] + b2 * Xnm1[name]) / pb.dt
-
+        # the state and the BDF time derivative of the last accepted step (zero after a steady solve)
+        X, Xdot = pb.split(), pb.split(pb.x_dot)
         v, p, u = X["velocity"], X["pressure"], X["displacement"]
         dx_f = pb.dx(tuple(pb.fluid_tags))
 
@@ -306,11 +334,11 @@ class ObstacleForces:
             phi = fem.Function(V)
             phi.x.array[dofs * bs + i] = 1.0
             phi.x.scatter_forward()
-            R = physics.fluid_ale_residual(ops, fluid, v, p, u, ddt("velocity"), ddt("displacement"),
+            R = physics.fluid_ale_residual(ops, fluid, v, p, u, Xdot["velocity"], Xdot["displacement"],
                                            phi, 0.0 * p, dx_f)
             for ob in pb.scene.open_boundaries:       # zero here unless an obstacle touches one
                 R += physics.open_boundary_residual(ops, fluid, ob.normal_stress, ob.backflow, v, u,
-                                                    ddt("displacement"), phi, pb.ds(tuple(ob.tags)))
+                                                    Xdot["displacement"], phi, pb.ds(tuple(ob.tags)))
             self._forms.append(fem.form(-R))
             setattr(self, f"_phi{i}", phi)
 
@@ -408,3 +436,148 @@ def run_fsi1(refinement: float = 1.0, comm=MPI.COMM_WORLD, options: SolverOption
                      problem.min_ale_jacobian())
     res.errors = res.relative_errors()
     return res
+
+
+# --- transient benchmarks (FSI2, FSI3) ----------------------------------------------------------------
+def periodic_stats(t, y, periods: int = 1) -> tuple:
+    """(mean, amplitude, frequency) of the periodic tail of y(t), as the benchmark defines them: over the
+    last `periods` full periods, mean = (max + min)/2 and amplitude = (max - min)/2; frequency = 1/T with T
+    the time between the peaks that bound those periods (peak times refined by a parabola through the
+    three samples around each maximum). A period is an interval between two up-crossings of the midline
+    (max + min)/2 of the second half of the series, with a hysteresis of 10 % of its range, and its peak is
+    its maximum."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    tail = y[len(y) // 2:]
+    mid, band = 0.5 * (tail.max() + tail.min()), 0.1 * (tail.max() - tail.min())
+    ups, below = [], False
+    for i, yi in enumerate(y):
+        if yi < mid - band:
+            below = True
+        elif yi > mid + band and below:
+            ups.append(i)
+            below = False
+    peaks = []
+    for i0, i1 in zip(ups[:-1], ups[1:]):
+        k = i0 + int(np.argmax(y[i0:i1]))
+        y0, y1, y2 = y[k - 1], y[k], y[k + 1]
+        denom = y0 - 2.0 * y1 + y2
+        shift = 0.5 * (y0 - y2) / denom if denom else 0.0
+        peaks.append((k, t[k] + shift * 0.5 * (t[k + 1] - t[k - 1])))
+    if len(peaks) < periods + 1:
+        raise ValueError(f"periodic_stats: {len(peaks)} peaks found, {periods + 1} needed for {periods} period(s)")
+    (k0, tp0), (k1, tp1) = peaks[-1 - periods], peaks[-1]
+    window = y[k0:k1 + 1]
+    return 0.5 * (window.max() + window.min()), 0.5 * (window.max() - window.min()), periods / (tp1 - tp0)
+
+
+def kick_force(density: float, acceleration: float, duration: float):
+    """Body force b = rho_s a sin^2(pi t / tau) e_y for t < tau (zero after): a short upward push on the flag
+    that breaks the symmetry of a steady start (a fully developed flow)."""
+    def force(X, t):
+        pulse = ufl.conditional(ufl.lt(t, duration), ufl.sin(math.pi * t / duration) ** 2, 0.0)
+        return ufl.as_vector((0.0, density * acceleration * pulse))
+    return force
+
+
+class TransientSeries(Observer):
+    """Time series after every accepted step: displacement of A, drag and lift (variational), and the
+    energies E_kin,s = int rho_s |v|^2 / 2, E_el = int mu E:E + lambda tr(E)^2 / 2 (St Venant-Kirchhoff)
+    on the flag and E_kin,f = int rho_f J |v|^2 / 2 on the fluid (reference configuration)."""
+
+    names = ("time", "ux_A", "uy_A", "drag", "lift", "solid_kinetic_energy", "elastic_energy",
+             "fluid_kinetic_energy")
+
+    def __init__(self, problem: MonolithicFSI, tags: Tags = TAGS, point=GEOMETRY.point_a, path=None,
+                 save_every: int = 0):
+        self.forces = ObstacleForces(problem, tags)
+        self.point, self.path, self.save_every = point, path, save_every
+        scene, ops = problem.scene, problem.ops
+        solid = scene.solids[0].material
+        X = problem.split()
+        v, u = X["velocity"], X["displacement"]
+        F = physics.deformation_gradient(ops, u)
+        E = 0.5 * (F.T * F - ops.identity())
+        dxs, dxf = problem.dx(tuple(problem.solid_tags)), problem.dx(tuple(problem.fluid_tags))
+        vv = ufl.dot(ops.vec(v), ops.vec(v))
+        self._energy = [fem.form(0.5 * solid.density * vv * ops.weight * dxs),
+                        fem.form((solid.lame_mu * ufl.inner(E, E) + 0.5 * solid.lame_lambda * ufl.tr(E) ** 2)
+                                 * ops.weight * dxs),
+                        fem.form(0.5 * scene.fluid.material.density * ufl.det(F) * vv * ops.weight * dxf)]
+        self.data = {k: [] for k in self.names}
+
+    def observe(self, problem, step):
+        uA = point_value(problem.field("displacement"), self.point)
+        drag, lift = self.forces.variational()
+        energies = [problem.comm.allreduce(fem.assemble_scalar(f), MPI.SUM) for f in self._energy]
+        for k, val in zip(self.names, [problem.time, uA[0], uA[1], drag, lift] + energies):
+            self.data[k].append(float(val))
+        if self.path and self.save_every and step % self.save_every == 0 and problem.comm.rank == 0:
+            self.save(self.path)
+
+    def save(self, path):
+        """The series so far as JSON {quantity: [values]} (SI), written atomically."""
+        with atomic_path(path) as tmp:
+            Path(tmp).write_text(json.dumps(self.data) + "\n")
+
+    def arrays(self) -> dict:
+        return {k: np.asarray(v) for k, v in self.data.items()}
+
+
+@dataclass
+class TransientResult:
+    case: str
+    refinement: float
+    dt: float
+    end: float
+    start: str
+    dofs: int
+    cells: int
+    setup_time: float
+    wall_time: float
+    steps: int
+    newton_iterations: int
+    reduced_steps: int             # steps shorter than the nominal dt (retries after a Newton failure)
+    min_ale_jacobian: float
+    series: dict
+
+
+CASES = {"FSI2": FSI2(), "FSI3": FSI3()}
+# choice: MUMPS workspace margin (ICNTL(14), percent over its estimate); the default 20 % fails (INFOG(1) = -9)
+# on the first FSI3 Jacobian, whose pivoting at Re = 200 exceeds the estimate
+MUMPS_WORKSPACE_PERCENT = 100
+
+
+def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3, end: float = 10.0,
+                  start: str = "rest", kick: tuple = (10.0, 0.05), comm=MPI.COMM_WORLD,
+                  options: SolverOptions | None = None, max_halvings: int = 4, series_path=None,
+                  save_every: int = 100) -> TransientResult:
+    """Transient FSI2/FSI3 with BDF2 at fixed nominal dt.
+
+    start "rest": the benchmark's protocol, fluid at rest and the inflow ramped over RAMP_TIME;
+    start "steady": from the steady solution at full inflow (the unstable symmetric branch), with the flag
+    pushed by kick_force(rho_s, *kick) (acceleration [m/s^2], duration [s]) so the oscillation starts at once.
+    The periodic regime is the same; "steady" skips the ramp and the slow growth from round-off.
+    series_path: the time series is written there (JSON) every `save_every` steps while it runs."""
+    if start not in ("rest", "steady"):
+        raise ValueError(f"run_transient start: 'rest' or 'steady', got {start!r}")
+    params = CASES[case]
+    t0 = time.perf_counter()
+    mesh, ct, ft = build_mesh(refinement, comm)
+    forces = [BodyForce([TAGS.flag], kick_force(params.rho_s, *kick))] if start == "steady" else []
+    scene, inflow = make_scene(mesh, ct, ft, params, ramp_time=RAMP_TIME if start == "rest" else 0.0,
+                               body_forces=forces)
+    problem = MonolithicFSI(scene, options or SolverOptions())
+    PETSc.Options()[f"{problem.ksp.getOptionsPrefix()}mat_mumps_icntl_14"] = MUMPS_WORKSPACE_PERCENT
+    if start == "steady":
+        solve_steady_with_continuation(problem, inflow, amplitudes=(0.25, 0.5, 0.75, 1.0))
+    series = TransientSeries(problem, path=series_path, save_every=save_every)
+    integrator = TimeIntegrator(problem, TimeSettings(end=end, dt=dt, max_halvings=max_halvings),
+                                observers=[series])
+    t1 = time.perf_counter()
+    records = integrator.run()
+    t2 = time.perf_counter()
+    ncells = comm.allreduce(mesh.topology.index_map(2).size_local, MPI.SUM)
+    reduced = sum(1 for r in records[:-1] if r.dt < dt * (1.0 - 1e-9))
+    return TransientResult(case, refinement, dt, end, start, problem.unknowns, ncells, t1 - t0, t2 - t1,
+                           len(records), sum(r.newton_iterations for r in records), reduced,
+                           min(r.min_ale_jacobian for r in records), series.arrays())

@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""Turek-Hron FSI2 / FSI3 (transient, periodic regime): time series of the displacement of point A, drag and
+lift; mean +- amplitude [frequency] over the last full periods against Turek & Hron (2006) with relative
+errors, and the cost per period (wall time, steps, Newton iterations per step).
+
+    .venv/bin/python benchmarks/turek_hron_transient.py --case FSI3 --refinement 0.5 --dt 1e-3 --end 10
+    .venv/bin/python benchmarks/turek_hron_transient.py --case FSI3 --start steady --end 2 --json fsi3.json
+    .venv/bin/python benchmarks/turek_hron_transient.py --from-json fsi3.json --window 0.5   # table only
+
+--start rest: the benchmark's protocol (inflow ramped over 2 s from rest); --start steady: from the steady
+solution at full inflow with a short upward push on the flag (--kick acceleration duration), which reaches
+the same periodic regime without the ramp and the slow growth from round-off. Statistics use the series
+from t >= end - window (default: the last 40 % of the run) and its last --periods periods.
+The JSON holds the series (SI) and the run's cost; it is rewritten every 100 steps while the run goes on.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import numpy as np  # noqa: E402
+from mpi4py import MPI  # noqa: E402
+
+from ureterfsi.scenes import turek_hron as th  # noqa: E402
+
+SCALE = {"ux_A": (1e3, "mm"), "uy_A": (1e3, "mm"), "drag": (1.0, "N/m"), "lift": (1.0, "N/m")}
+
+
+def table(case: str, series: dict, t_from: float, periods: int) -> str:
+    """Rows quantity | ours mean +- amplitude [f] | reference | relative errors (mean, amplitude, frequency)."""
+    t = np.asarray(series["time"])
+    keep = t >= t_from
+    ref = th.REFERENCE_TRANSIENT[case]
+    lines = [f"{case}: statistics over t in [{t_from:.3f}, {t[-1]:.3f}] s, last {periods} period(s)",
+             f"{'quantity':>9} {'ours':>32} {'Turek-Hron 2006':>32} {'err mean':>9} {'err ampl':>9} {'err f':>7}"]
+    for k, (scale, unit) in SCALE.items():
+        try:
+            m, a, f = th.periodic_stats(t[keep], np.asarray(series[k])[keep], periods)
+        except ValueError as err:
+            lines.append(f"{k:>9} {str(err)}")
+            continue
+        rm, ra, rf = ref[k]
+        # a mean near zero (u_y, lift) is relative to the amplitude, as the benchmark's own spread is
+        em = abs(m - rm) / max(abs(rm), 0.1 * ra)
+        lines.append(f"{k + ' [' + unit + ']':>9} {m * scale:10.4g} +- {a * scale:9.4g} [{f:6.3f} Hz] "
+                     f"{rm * scale:10.4g} +- {ra * scale:9.4g} [{rf:5.2f} Hz] "
+                     f"{100 * em:8.2f}% {100 * abs(a - ra) / ra:8.2f}% {100 * abs(f - rf) / rf:6.2f}%")
+    return "\n".join(lines)
+
+
+def cost(run: dict, frequency: float) -> str:
+    steps, wall = run["steps"], run["wall_time"]
+    sim = run["end"]
+    per_period = 1.0 / frequency
+    return (f"cost: {run['dofs']} unknowns, {run['cells']} cells, dt = {run['dt']:g} s, {steps} steps in "
+            f"{wall:.0f} s ({wall / steps:.3f} s/step, {run['newton_iterations'] / steps:.2f} Newton iterations "
+            f"per step, {run['reduced_steps']} reduced steps); per period of u_y(A) ({per_period:.3f} s): "
+            f"{wall * per_period / sim:.0f} s wall, {steps * per_period / sim:.0f} steps")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--case", choices=sorted(th.CASES), default="FSI3")
+    ap.add_argument("--refinement", type=float, default=0.5)
+    ap.add_argument("--dt", type=float, default=1e-3, help="time step [s]")
+    ap.add_argument("--end", type=float, default=10.0, help="end time [s]")
+    ap.add_argument("--start", choices=("rest", "steady"), default="rest")
+    ap.add_argument("--kick", type=float, nargs=2, default=(10.0, 0.05), metavar=("ACCEL", "DURATION"),
+                    help="--start steady: upward push on the flag [m/s^2] over [s]")
+    ap.add_argument("--mesh-motion", choices=("harmonic", "elastic"), default="harmonic")
+    ap.add_argument("--mesh-stiffening", type=float, default=1.0, help="exponent q of (V_mean/V_cell)^q")
+    ap.add_argument("--window", type=float, help="statistics over the last WINDOW seconds")
+    ap.add_argument("--periods", type=int, default=1)
+    ap.add_argument("--json", help="write series and cost here")
+    ap.add_argument("--from-json", help="no run: tabulate the series of an earlier --json file")
+    args = ap.parse_args(argv)
+    comm = MPI.COMM_WORLD
+    if args.from_json:
+        saved = json.loads(Path(args.from_json).read_text())
+        run, series = saved.get("run"), saved.get("series", saved)
+        case = run["case"] if run else args.case
+    else:
+        logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
+        options = th.SolverOptions(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening)
+        res = th.run_transient(args.case, args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
+                               options=options, series_path=args.json)
+        case, series = args.case, {k: v.tolist() for k, v in res.series.items()}
+        run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening}
+        run.update({k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
+                                                 "setup_time", "wall_time", "steps", "newton_iterations",
+                                                 "reduced_steps", "min_ale_jacobian")})
+        if args.json and comm.rank == 0:
+            Path(args.json).write_text(json.dumps({"run": run, "series": series}) + "\n")
+    if comm.rank != 0:
+        return
+    t_end = series["time"][-1]
+    t_from = t_end - (args.window if args.window else 0.4 * t_end)
+    print(table(case, series, t_from, args.periods))
+    if run:
+        t = np.asarray(series["time"])
+        try:
+            _, _, f = th.periodic_stats(t[t >= t_from], np.asarray(series["uy_A"])[t >= t_from], args.periods)
+            print(cost(run, f))
+        except ValueError as err:
+            print(f"cost: {run['steps']} steps in {run['wall_time']:.0f} s; no period ({err})")
+
+
+if __name__ == "__main__":
+    main()
