@@ -300,6 +300,20 @@ def check_stricture(cfg):
                           f" x the unobstructed {_fmt(open_gap)} m (no contact)")
 
 
+def check_stent_offset(cfg):
+    """An offset stent (geometry.stent_offset, issue 13) keeps the narrowest stent-wall gap, R_i(1 - f) - r_o - |x_s|,
+    >= geometry.stent_offset_min_gap of the coaxial annulus R_i - r_o."""
+    g, geo = cfg["geometry"], _geom(cfg)
+    if not geo.stent_offset:
+        return
+    gap, open_gap = geo.narrowest_radius - geo.stent_outer_radius - abs(geo.stent_offset), \
+        geo.ureter_inner_radius - geo.stent_outer_radius
+    if not gap >= g["stent_offset_min_gap"] * open_gap * (1 - RTOL):
+        raise ConfigError("geometry.stent_offset",
+                          f"{_fmt(geo.stent_offset)} m leaves a stent-wall gap of {_fmt(gap)} m; need >= "
+                          f"geometry.stent_offset_min_gap {_fmt(g['stent_offset_min_gap'])} x the coaxial {_fmt(open_gap)} m")
+
+
 def check_model_keys(cfg):
     keys = sorted(cfg["models"], key=int)
     want = [str(i) for i in range(1, len(keys) + 1)]
@@ -585,7 +599,7 @@ def check_stability(cfg):
 
 CHECKS = (
     check_plausible,
-    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_stent_offset,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
     check_runs, check_ladder, check_figures, check_stability,
