@@ -629,7 +629,8 @@ def validate_config(cfg: dict) -> None:
 
 def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
     """Why the mesh of `model` at `level` in `symmetry` (and so every run on it) cannot be made, '' if it can: a
-    model of `models`, a level of `mesh.levels`, and the axisymmetric (r-z) section only of a stent-free model."""
+    model of `models`, a level of `mesh.levels`, the axisymmetric (r-z) section only of a stent-free model, and no
+    quarter model of an offset stent (geometry.stent_offset breaks the x = 0 mirror plane)."""
     models, levels = cfg["models"], cfg["mesh"]["levels"]
     if model not in models:
         return f"model {model!r} is not one of models {sorted(models, key=int)}"
@@ -639,6 +640,9 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
         free = [m for m in sorted(models, key=int) if not models[m]["stent"]]
         return (f"model {model} has a stent: the axisymmetric (r-z) section is only for the stent-free models "
                 f"{free} (side holes break rotational symmetry)")
+    if symmetry == "quarter" and models[model]["stent"] and cfg["geometry"]["stent_offset"]:
+        return (f"geometry.stent_offset {_fmt(cfg['geometry']['stent_offset'])} m breaks the x = 0 mirror plane: "
+                f"model {model} has no quarter model; use symmetry half (y >= 0)")
     return ""
 
 
