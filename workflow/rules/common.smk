@@ -281,7 +281,9 @@ def design_solve_study(w):
     st = DESIGNS[w.design_study]
     p = st.point(w.point)
     sections = ureter_designs.solve_sections(p.config, st.model)
-    return json.dumps(sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True)
+    return json.dumps(
+        sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True
+    )
 
 
 def design_solve_mem_mb(w):
