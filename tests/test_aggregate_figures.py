@@ -21,7 +21,6 @@ from ureterfsi import aggregate, plotting
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.metadata import VARIABLES as CF
-from ureterfsi.geometry import HOLE_FRACTION
 from ureterfsi.study.options import RunSpec
 from ureterfsi.study.probes import N_HOLE, N_LINE, UreterProbes, probes_dataset
 
@@ -56,7 +55,7 @@ class _SyntheticProbes:
         if self.has_stent:
             self.hole_z = hole_pair_positions(g, sm)
             sides = [1.0] if symmetry == "quarter" else [1.0, -1.0]
-            self.holes = [(zk, sd) for zk in self.hole_z for sd in sides]
+            self.holes = [(zk, sd, 1) for zk in self.hole_z for sd in sides]
             self.hole_s = np.linspace(-g.hole_radius, g.hole_radius, N_HOLE)
             self.outlet_hole_z = float(self.hole_z.max())
             vm = VM_BASE * (1 + 0.2 * np.sin(2 * np.pi * t / 3)) * (1 + 0.1 * k)
@@ -64,7 +63,7 @@ class _SyntheticProbes:
             for c in "xy":
                 self.series[f"stent_max_von_mises_{c}"] = list(np.full_like(t, 1e-3))
             self.series["stent_max_von_mises_z"] = list(np.clip(zc, 0, g.length))
-            self.series["hole_flux"] = [[1e-10 * np.sin(2 * np.pi * (ti - zk / 0.02) / 3) for zk, _ in self.holes]
+            self.series["hole_flux"] = [[1e-10 * np.sin(2 * np.pi * (ti - zk / 0.02) / 3) for zk, _, _ in self.holes]
                                         for ti in t]
             for end in ("outlet", "inlet"):
                 self.series[f"{end}_lumen_flux"] = list(1e-2 * np.asarray(self.series[f"{end}_flux"]))
@@ -129,7 +128,6 @@ def test_synthetic_run_has_probe_structure(cfg):
     assert set(ds.dims) == {"time", "probe_time", "z", "hole_offset", "hole", "step"}
     assert ds.attrs["model"] == "2" and ds.attrs["symmetry"] == "quarter"
     assert ds.sizes["hole"] == 11   # quarter model: one hole per pair
-    assert HOLE_FRACTION["quarter"] == 0.5
     for v in ds.data_vars:
         assert v in CF
 

@@ -78,7 +78,8 @@ def test_hole_channels(cfg, geom, built, model, symmetry):
     signs = (1,) if symmetry == "quarter" else (-1, 1)
     assert info["hole_pair_z"] == pytest.approx(list(z))
     assert info["hole_channels_found"] == len(z) * len(signs)
-    found = sorted((c["y_sign"], c["z"]) for c in info["hole_channels"])
+    assert {c["axis"] for c in info["hole_channels"]} == {"y"}
+    found = sorted((c["sign"], c["z"]) for c in info["hole_channels"])
     expected = sorted((s, zk) for s in signs for zk in z)
     assert [s for s, _ in found] == [s for s, _ in expected]
     assert [zc for _, zc in found] == pytest.approx([zk for _, zk in expected], abs=0.1 * geom.hole_radius)
@@ -286,3 +287,69 @@ def test_strictured_wall_model(mini):
         xv = compute_midpoints(mesh, 0, verts.astype(np.int32))
         assert verts.size == wall.nz + 1 and np.abs(xv[:, 0] - radius(xv[:, 1])).max() < 1e-12
     assert x[:, 0].min() == pytest.approx(geom.narrowest_radius, rel=1e-12)
+
+
+# ------------------------------------------------------------------------------------------ rotated pairs, offset stent
+
+
+def test_aligned_coaxial_gives_todays_mesh(mini, tmp_path):
+    """hole_arrangement aligned with stent_offset 0 is the mesh of before both keys existed, node for node."""
+    cfg = load_config(mini, {"geometry": {"hole_arrangement": "aligned", "stent_offset": 0.0}})
+    info = build_mesh(cfg, "3", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
+    digest = hashlib.sha256((tmp_path / "m.msh").read_bytes()).hexdigest()[:16]
+    assert (info["cells_total"], info["nodes"], digest) == UNSTRICTURED["3", "quarter"]
+
+
+def _stent_nodes(msh) -> np.ndarray:
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.merge(str(msh))
+        _, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(3, tags.STENT)
+    finally:
+        gmsh.finalize()
+    return np.asarray(xyz).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("offset,symmetry", [(0.0, "quarter"), (0.001, "half")])
+def test_rotated_pairs_mesh(mini, tmp_path, offset, symmetry):
+    """rotated_90: pairs on y, x, y (model 2, 3 pairs), found in the mesh's hole channels at their positions. Quarter:
+    each hole is cut in half by the plane its axis lies in (its wall spans 0..a across); half y >= 0 with an offset
+    stent: the y holes whole (+y side only), the x pair both sides, each cut by y = 0. The stent axis, measured from
+    the stent's nodes, lies at the offset; the volumes match the analytic ones."""
+    cfg = load_config(mini, {"geometry": {"hole_arrangement": "rotated_90", "stent_offset": offset}})
+    geom = UreterGeometry.from_config(cfg)
+    info = build_mesh(cfg, "2", "coarse", symmetry, tmp_path / "m.msh", tmp_path / "m.json")
+    z, a = hole_pair_positions(geom, StentModel.from_config(cfg, "2")), geom.hole_radius
+    if symmetry == "quarter":
+        expected = [("y", 1, z[0]), ("x", 1, z[1]), ("y", 1, z[2])]
+    else:
+        expected = [("y", 1, z[0]), ("x", -1, z[1]), ("x", 1, z[1]), ("y", 1, z[2])]
+    found = info["hole_channels"]
+    assert [(c["axis"], c["sign"]) for c in found] == [(ax, sg) for ax, sg, _ in expected]
+    assert [c["z"] for c in found] == pytest.approx([zk for _, _, zk in expected], abs=0.05 * a)
+    for c in found:
+        cut = symmetry == "quarter" or c["axis"] == "x"
+        lo, hi = c["across"]
+        assert hi == pytest.approx(a, rel=1e-6) and lo == pytest.approx(0.0 if cut else -a, abs=1e-9), c
+    for name, m in info["subdomain_measure"].items():
+        assert abs(m["rel_error"]) < 5e-3, (name, m)
+    x = _stent_nodes(tmp_path / "m.msh")     # the stent tube about its axis (offset, 0): r_i <= rho <= r_o
+    rho = np.hypot(x[:, 0] - offset, x[:, 1])
+    assert rho.max() == pytest.approx(geom.stent_outer_radius, rel=1e-5)     # OCC places nodes within ~1e-9 m
+    assert rho.min() == pytest.approx(geom.stent_inner_radius, rel=1e-5) and x[:, 1].min() == pytest.approx(0, abs=1e-12)
+    if symmetry == "half":       # the whole x extent: the axis midway
+        assert 0.5 * (x[:, 0].min() + x[:, 0].max()) == pytest.approx(offset, abs=1e-8)
+    mesh, ct, ft = load_mesh(tmp_path / "m.msh", MPI.COMM_WORLD)
+    assert np.unique(ft.indices).size == ft.indices.size == sum(info["facet_tags"].values())
+    planes = {"quarter": {tags.SYMMETRY_X, tags.SYMMETRY_Y}, "half": {tags.SYMMETRY_Y}}[symmetry]
+    assert set(ft.values.tolist()) == EXPECTED_FACETS["full"] | planes
+
+
+def test_offset_stent_quarter_refused(mini, tmp_path):
+    cfg = load_config(mini, {"geometry": {"stent_offset": 0.001}})
+    with pytest.raises(ValueError, match=r"^geometry.stent_offset: .*quarter"):
+        build_mesh(cfg, "2", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
+    assert not list(tmp_path.iterdir())

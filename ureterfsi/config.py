@@ -301,6 +301,20 @@ def check_stricture(cfg):
                           f" x the unobstructed {_fmt(open_gap)} m (no contact)")
 
 
+def check_stent_offset(cfg):
+    """An offset stent (geometry.stent_offset, issue 13) keeps the narrowest stent-wall gap, R_i(1 - f) - r_o - |x_s|,
+    >= geometry.stent_offset_min_gap of the coaxial annulus R_i - r_o."""
+    g, geo = cfg["geometry"], _geom(cfg)
+    if not geo.stent_offset:
+        return
+    gap, open_gap = geo.narrowest_radius - geo.stent_outer_radius - abs(geo.stent_offset), \
+        geo.ureter_inner_radius - geo.stent_outer_radius
+    if not gap >= g["stent_offset_min_gap"] * open_gap * (1 - RTOL):
+        raise ConfigError("geometry.stent_offset",
+                          f"{_fmt(geo.stent_offset)} m leaves a stent-wall gap of {_fmt(gap)} m; need >= "
+                          f"geometry.stent_offset_min_gap {_fmt(g['stent_offset_min_gap'])} x the coaxial {_fmt(open_gap)} m")
+
+
 def check_model_keys(cfg):
     keys = sorted(cfg["models"], key=int)
     want = [str(i) for i in range(1, len(keys) + 1)]
@@ -586,7 +600,7 @@ def check_stability(cfg):
 
 CHECKS = (
     check_plausible,
-    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_stent_offset,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
     check_runs, check_ladder, check_figures, check_stability,
@@ -616,7 +630,8 @@ def validate_config(cfg: dict) -> None:
 
 def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
     """Why the mesh of `model` at `level` in `symmetry` (and so every run on it) cannot be made, '' if it can: a
-    model of `models`, a level of `mesh.levels`, and the axisymmetric (r-z) section only of a stent-free model."""
+    model of `models`, a level of `mesh.levels`, the axisymmetric (r-z) section only of a stent-free model, and no
+    quarter model of an offset stent (geometry.stent_offset breaks the x = 0 mirror plane)."""
     models, levels = cfg["models"], cfg["mesh"]["levels"]
     if model not in models:
         return f"model {model!r} is not one of models {sorted(models, key=int)}"
@@ -626,6 +641,9 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
         free = [m for m in sorted(models, key=int) if not models[m]["stent"]]
         return (f"model {model} has a stent: the axisymmetric (r-z) section is only for the stent-free models "
                 f"{free} (side holes break rotational symmetry)")
+    if symmetry == "quarter" and models[model]["stent"] and cfg["geometry"]["stent_offset"]:
+        return (f"geometry.stent_offset {_fmt(cfg['geometry']['stent_offset'])} m breaks the x = 0 mirror plane: "
+                f"model {model} has no quarter model; use symmetry half (y >= 0)")
     return ""
 
 

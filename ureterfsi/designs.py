@@ -14,6 +14,10 @@ sizes, model row, level, symmetry) and, on the one-way rung, the r-z wall motion
 wall motion; a wall or load change gives one wall motion per distinct wall, shared by every stent on it; a
 stricture (the obstruction, ``geometry.stricture_*``) changes both the wall and the mesh.
 
+A point's mesh symmetry follows from its parameters (``UreterGeometry.symmetry``): the quarter model while both
+mirror planes hold (aligned or rotated hole pairs), the half model y >= 0 for a stent offset along x
+(``stent_eccentricity``); a stent-free base model run axisymmetric stays axisymmetric.
+
 Results (``study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
 through each side hole, the share of the outlet flow exchanged through the holes, the share of the outlet flow
 inside the stent lumen, peak stent von Mises stress, peak wall displacement) and the time series behind them, on one dimension per parameter for a full
@@ -60,13 +64,12 @@ PARAMETERS = {
     "stricture_fraction": Parameter("1", "fraction by which a stricture narrows the lumen radius at its centre", "wall"),
     "stricture_length": Parameter("m", "axial length of the stricture", "wall"),
     "stricture_position": Parameter("m", "axial position of the stricture centre", "wall"),
+    # geometry.hole_arrangement (0 = aligned, 90 = rotated_90) and geometry.stent_offset: a new mesh
+    "hole_pair_rotation": Parameter("degree", "angle between the axes of successive side-hole pairs", "stent"),
+    "stent_eccentricity": Parameter("m", "offset of the stent axis from the ureter axis, along x", "stent"),
 }
+ARRANGEMENT = {0.0: "aligned", 90.0: "rotated_90"}     # hole_pair_rotation -> geometry.hole_arrangement
 STRICTURE = ("stricture_fraction", "stricture_length", "stricture_position")
-NOT_YET_SUPPORTED = {
-    "hole_pair_rotation": "rotated hole pairs break the quarter symmetry; the full or a sector mesh is not built yet",
-    "stent_eccentricity": "an eccentric stent breaks the quarter symmetry; the half mesh of an offset stent is not "
-                          "built yet",
-}
 MOONEY_RIVLIN = ("c10", "c01", "c20", "c02", "c11")
 # config keys each parameter sets (to name the parameter an invalid point's error comes from)
 CONFIG_KEYS = {
@@ -81,6 +84,8 @@ CONFIG_KEYS = {
     "stricture_fraction": ("geometry.stricture_fraction",),
     "stricture_length": ("geometry.stricture_position", "geometry.stricture_fraction"),
     "stricture_position": ("geometry.stricture_position",),
+    "hole_pair_rotation": ("geometry.hole_arrangement",),
+    "stent_eccentricity": ("geometry.stent_offset",),
 }
 
 
@@ -91,6 +96,7 @@ class Point:
     config: dict                       # the point's validated configuration
     mesh_id: str
     wall_id: str | None                # None on the fully coupled rung (no separate wall solve)
+    symmetry: str                      # from the point's geometry (point_symmetry)
 
 
 @dataclass
@@ -99,7 +105,6 @@ class Study:
     model: str
     level: str
     rung: str
-    symmetry: str
     kind: str                          # full_factorial | one_at_a_time | sobol | latin_hypercube
     parameters: list                   # names, in configuration order
     base: dict                         # parameter -> value of the base configuration
@@ -140,8 +145,9 @@ def base_values(cfg: dict, model: str) -> dict:
             "stent_outer_diameter": g["stent_inner_diameter"] + 2 * g["stent_wall_thickness"],
             "stent_wall_thickness": g["stent_wall_thickness"],
             "stent_youngs_modulus": cfg["stent"]["youngs_modulus"], "wall_stiffness_scale": 1.0,
-            "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"]} | {
-            p: g[p] for p in STRICTURE}
+            "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"],
+            "hole_pair_rotation": {v: k for k, v in ARRANGEMENT.items()}[g["hole_arrangement"]],
+            "stent_eccentricity": g["stent_offset"]} | {p: g[p] for p in STRICTURE}
 
 
 def apply(cfg: dict, model: str, values: dict) -> dict:
@@ -172,7 +178,19 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
     if "pulse_speed" in values:
         out["peristalsis"]["speed"] = values["pulse_speed"]
     g.update({p: values[p] for p in STRICTURE if p in values})
+    if "hole_pair_rotation" in values:
+        g["hole_arrangement"] = ARRANGEMENT[values["hole_pair_rotation"]]
+    if "stent_eccentricity" in values:
+        g["stent_offset"] = values["stent_eccentricity"]
     return out
+
+
+def point_symmetry(cfg: dict, base_symmetry: str) -> str:
+    """A design point's mesh symmetry: axisymmetric if its base model runs so (no stent), else the smallest model
+    its mirror planes allow (ureterfsi.geometry.UreterGeometry.symmetry)."""
+    from .geometry import UreterGeometry
+
+    return base_symmetry if base_symmetry == "axisymmetric" else UreterGeometry.from_config(cfg).symmetry
 
 
 def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:
@@ -214,9 +232,9 @@ def _check_study(cfg: dict, name: str, spec: dict) -> None:
     if ("grid" in spec) == ("sample" in spec):
         raise ConfigError(key, "needs exactly one of grid (values per parameter) or sample (bounds per parameter)")
     params = spec["grid"]["parameters"] if "grid" in spec else spec["sample"]["bounds"]
-    for p in params:
-        if p in NOT_YET_SUPPORTED:
-            raise ConfigError(_parameter_key(name, spec, p), f"not yet supported: {NOT_YET_SUPPORTED[p]}")
+    if "sample" in spec and "hole_pair_rotation" in params:
+        raise ConfigError(_parameter_key(name, spec, "hole_pair_rotation"),
+                          f"takes the values {sorted(ARRANGEMENT)} only; vary it on a grid, not in a sample")
     stented = cfg["models"][spec["model"]]["stent"]
     for p in params:
         if PARAMETERS[p].part in ("stent", "solve") and not stented:
@@ -300,11 +318,11 @@ def expand_study(cfg: dict, name: str) -> Study:
     spec = cfg["design_studies"][name]
     _check_study(cfg, name, spec)
     model = spec["model"]
-    fidelity, symmetry = run_rung(cfg, model)
+    fidelity, base_symmetry = run_rung(cfg, model)
     rung = spec.get("rung") or fidelity
     base = base_values(cfg, model)
     kind, names, grid, all_values = _point_values(cfg, spec, base)
-    study = Study(name, model, spec["level"], rung, symmetry, kind, names, {p: base[p] for p in names}, grid)
+    study = Study(name, model, spec["level"], rung, kind, names, {p: base[p] for p in names}, grid)
     seen = set()
     for values in all_values:
         pid = point_id(values)
@@ -320,8 +338,9 @@ def expand_study(cfg: dict, name: str) -> Study:
         except ConfigError as err:
             raise ConfigError(_parameter_key(name, spec, _blame(values, err)),
                               f"point {pid} ({_values_text(values)}) cannot be posed: {err.key}: {err.constraint}") from None
+        symmetry = point_symmetry(pcfg, base_symmetry)
         study.points.append(Point(pid, values, pcfg, _short_hash(mesh_sections(pcfg, model, spec["level"], symmetry)),
-                                  _short_hash(wall_sections(pcfg)) if rung == "one_way" else None))
+                                  _short_hash(wall_sections(pcfg)) if rung == "one_way" else None, symmetry))
     return study
 
 
@@ -348,7 +367,7 @@ def mesh_request(cfg: dict, mesh_id: str) -> tuple[dict, str, str, str]:
     for st in studies(cfg).values():
         for p in st.points:
             if p.mesh_id == mesh_id:
-                return p.config, st.model, st.level, st.symmetry
+                return p.config, st.model, st.level, p.symmetry
     raise KeyError(f"no design point uses mesh {mesh_id}")
 
 
@@ -365,6 +384,7 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
            "wall_time")
+SYMMETRY_FACTOR = {"full": 1, "half": 2, "quarter": 4, "axisymmetric": 1}   # full model / meshed model
 SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement")
 
 
@@ -372,13 +392,24 @@ def _trapz(y: np.ndarray, t: np.ndarray) -> float:
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
 
 
+def hole_mirror_weights(run) -> np.ndarray:
+    """Per recorded hole, the holes of the full model it stands for: 2 where its opposite hole (same z and axis,
+    other side) lies outside the symmetric model (its mirror image, the same flow), else 1."""
+    if "hole_flux" not in run:
+        return np.zeros(0)
+    z, side = run["hole_z"].values, run["hole_side"].values
+    axis = run["hole_axis"].values if "hole_axis" in run else np.ones_like(side)
+    recorded = {(round(float(a), 9), int(b), float(c)) for a, b, c in zip(z, axis, side)}
+    return np.array([1.0 if (round(float(a), 9), int(b), -float(c)) in recorded else 2.0
+                     for a, b, c in zip(z, axis, side)])
+
+
 def point_scalars(run) -> dict:
     """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
     q = run["outlet_flux"].values.astype(float)
     hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((t.size, 0))
-    # the quarter model records the +y hole of each pair; the -y hole carries the same flow by symmetry
-    mirror = 2.0 if hole.shape[1] and np.all(run["hole_side"].values > 0) else 1.0
+    mirror = hole_mirror_weights(run)
     exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
     if "outlet_lumen_flux" in run:
         lumen = run["outlet_lumen_flux"].values.astype(float)
@@ -390,7 +421,7 @@ def point_scalars(run) -> dict:
             "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
             "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
-            "hole_exchange_fraction": mirror * exchange.sum() / _trapz(np.abs(q), t),
+            "hole_exchange_fraction": float(np.sum(mirror * exchange)) / _trapz(np.abs(q), t),
             "stent_lumen_fraction": lumen_fraction,
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
@@ -416,6 +447,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
     series = {k: np.full((n, t.size), np.nan) for k in SERIES}
     hole_series, hole_z = np.full((n, t.size, n_hole), np.nan), np.full((n, n_hole), np.nan)
+    hole_axis, hole_side = np.full((n, n_hole), np.nan), np.full((n, n_hole), np.nan)
     for i, p in enumerate(st.points):
         r = runs[p.id]
         for k, v in point_scalars(r).items():
@@ -427,16 +459,23 @@ def study_dataset(cfg: dict, name: str, paths: dict):
         for j in range(r.sizes.get("hole", 0)):
             hole_series[i, :, j] = np.interp(t, rt, r["hole_flux"].values[:, j], left=np.nan, right=np.nan)
             hole_z[i, j] = float(r["hole_z"].values[j])
+            hole_side[i, j] = float(r["hole_side"].values[j])
+            hole_axis[i, j] = float(r["hole_axis"].values[j]) if "hole_axis" in r else 1.0
     vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
     vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
+    vars_["model_fraction"] = (("design",), np.array([1.0 / SYMMETRY_FACTOR[p.symmetry] for p in st.points]))
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
-              "hole_z": (("design", "hole"), hole_z)}
+              "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
+              "hole_axis": (("design", "hole"), hole_axis)}
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
     ds = xr.Dataset(vars_, coords=coords)
     meta = VARIABLES | {q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters}
     if st.kind == "full_factorial":
-        ds = ds.set_index(design=st.parameters).unstack("design")
+        if len(st.parameters) == 1:   # one parameter: a plain index, nothing to unstack
+            ds = ds.swap_dims(design=st.parameters[0]).drop_vars("design")
+        else:
+            ds = ds.set_index(design=st.parameters).unstack("design")
         ds = ds.reindex({q: st.grid[q] for q in st.parameters}).transpose(*st.parameters, ...)
         ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
             [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
@@ -444,7 +483,8 @@ def study_dataset(cfg: dict, name: str, paths: dict):
         if k in meta:
             ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
     ds.attrs.update(provenance_attrs(cfg, study=name, design_kind=st.kind, model=st.model, mesh_level=st.level,
-                                     rung=st.rung, symmetry=st.symmetry, base_values=st.base,
+                                     rung=st.rung, point_symmetry={p.id: p.symmetry for p in st.points},
+                                     base_values=st.base,
                                      points={p.id: p.values for p in st.points},
                                      point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points}))
     ds.attrs["Conventions"] = "CF-1.8"

@@ -1,8 +1,10 @@
 """Geometry of the ureter segment, the stent and its side holes (paper §2.1, Table 1).
 
 All lengths in metres. The ureter axis is z, inlet (kidney) at z = 0, outlet (bladder) at z = L.
-Side holes are radial, in diametrically opposite pairs on the y axis. An optional axisymmetric stricture
-(issue 13) narrows the lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`).
+Side holes are radial, in diametrically opposite pairs, all on the y axis (`hole_arrangement: aligned`) or
+alternating between the y and the x axis from pair to pair (`rotated_90`, issue 13). The stent axis lies on the
+ureter's or displaced along x by `stent_offset` (issue 13). An optional axisymmetric stricture (issue 13) narrows the
+lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`).
 """
 from __future__ import annotations
 
@@ -13,8 +15,6 @@ import numpy as np
 
 # share of the full segment a mesh symmetry models (the r-z integrals carry the weight 2 pi r: the whole)
 SYMMETRY_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.25, "axisymmetric": 1.0}
-# share of each side hole inside the model: the planes x = 0 (half, quarter) cut the holes on the y axis
-HOLE_FRACTION = {"full": 1.0, "half": 0.5, "quarter": 0.5}
 
 
 @dataclass(frozen=True)
@@ -49,6 +49,8 @@ class UreterGeometry:
     hole_radius: float
     hole_end_clearance: float
     stricture: Stricture | None = None
+    hole_arrangement: str = "aligned"
+    stent_offset: float = 0.0
 
     @classmethod
     def from_config(cls, cfg: dict) -> "UreterGeometry":
@@ -64,6 +66,8 @@ class UreterGeometry:
             hole_radius=0.5 * g["hole_diameter"],
             hole_end_clearance=g["hole_end_clearance"],
             stricture=Stricture.from_geometry(g),
+            hole_arrangement=g["hole_arrangement"],
+            stent_offset=g["stent_offset"],
         )
 
     @property
@@ -94,6 +98,21 @@ class UreterGeometry:
     def probe_radius(self) -> float:
         """Radius of the stent-stress probe line, the middle of the stent wall (paper §3.1)."""
         return 0.5 * (self.stent_inner_radius + self.stent_outer_radius)
+
+    @property
+    def mirror_planes(self) -> tuple:
+        """Mirror planes of the geometry: y = 0 always, x = 0 unless the stent is offset along x."""
+        return ("y",) if self.stent_offset else ("x", "y")
+
+    @property
+    def symmetry(self) -> str:
+        """Smallest 3D model the mirror planes allow: quarter with both, half (y >= 0) with y = 0 alone."""
+        return "quarter" if len(self.mirror_planes) == 2 else "half"
+
+    def stent_probe_points(self, z) -> np.ndarray:
+        """Stent-stress probe line (x_s + r_m, 0, z): mid-wall radius r_m, plane y = 0, stent axis at x_s."""
+        z = np.asarray(z, dtype=float)
+        return np.c_[np.full_like(z, self.stent_offset + self.probe_radius), np.zeros_like(z), z]
 
 
 @dataclass(frozen=True)
@@ -129,6 +148,13 @@ def hole_pair_positions(geom: UreterGeometry, model: StentModel) -> np.ndarray:
     return np.clip(k * model.hole_pair_spacing, c, geom.length - c)
 
 
+def hole_pair_axes(geom: UreterGeometry, model: StentModel) -> np.ndarray:
+    """Axis of each hole pair (0 = x, 1 = y), in the order of hole_pair_positions: all 1 for `aligned`,
+    1, 0, 1, ... for `rotated_90` (pair k on the y axis for even k, on the x axis for odd k)."""
+    k = np.arange(hole_pair_positions(geom, model).size)
+    return np.where(k % 2 == 0, 1, 0) if geom.hole_arrangement == "rotated_90" else np.ones_like(k)
+
+
 def outlet_hole_position(geom: UreterGeometry, model: StentModel) -> float:
     """Axial position of the outlet-most hole pair (paper §3.4-3.5, Figs. 6-9)."""
     z = hole_pair_positions(geom, model)
@@ -140,7 +166,7 @@ def outlet_hole_position(geom: UreterGeometry, model: StentModel) -> float:
 def hole_channel_volume(geom: UreterGeometry) -> float:
     """Exact volume of one radial hole channel through the stent wall.
 
-    A cylinder of radius a along y cut by the coaxial tube r_i <= sqrt(x^2 + y^2) <= r_o:
+    A cylinder of radius a along y (or x: the same volume) cut by the coaxial tube r_i <= sqrt(x^2 + y^2) <= r_o:
     V = int_{-a}^{a} int_{-w(x)}^{w(x)} [sqrt(r_o^2 - x^2) - sqrt(r_i^2 - x^2)] dz dx,
     w(x) = sqrt(a^2 - x^2); evaluated with Gauss-Legendre quadrature (smooth integrand).
     """

@@ -1,9 +1,11 @@
 """Conforming gmsh meshes of the stented ureter (paper §2.1 geometry, Table 1 hole pairs, §2.4.1 mesh).
 
-One OpenCASCADE model per (model, level, symmetry): ureter wall tube, fluid lumen, coaxial stent tube with
-radial side holes on the y axis, fragmented into a conforming multi-region tetrahedral mesh. Cells and
+One OpenCASCADE model per (model, level, symmetry): ureter wall tube, fluid lumen, stent tube (coaxial, or its
+axis displaced along x by geometry.stent_offset) with radial side holes on the y axis, or alternating y and x
+(geometry.hole_arrangement), fragmented into a conforming multi-region tetrahedral mesh. Cells and
 facets are gmsh physical groups numbered as in `ureterfsi.tags`; every boundary facet and every interface
-facet carries exactly one tag. "axisymmetric" (model 1 only) is the r-z section, r = x, z = y.
+facet carries exactly one tag. "half" keeps x >= 0, or y >= 0 for an offset stent (the x = 0 plane is no mirror
+then); "quarter" keeps x, y >= 0 and refuses an offset stent. "axisymmetric" (model 1 only) is the r-z section, r = x, z = y.
 
 choice: the paper meshes with COMSOL (boundary-layer prisms, §2.4.1); here all elements are simplices,
 sized by analytic radial distance fields (exact, no sampling) and a Distance field on the hole walls.
@@ -17,8 +19,8 @@ import gmsh
 import numpy as np
 
 from ureterfsi import tags
-from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_positions, lumen_area,
-                                subdomain_volumes)
+from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
+                                lumen_area, subdomain_volumes)
 from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
 from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
 
@@ -30,7 +32,8 @@ GRADING = 0.5
 # pass at 0.4 lifts the minimum to ~0.3 for a few seconds.
 OPTIMIZE_THRESHOLD = 0.4
 # choice: rotation of the z-cylinders about z (seam line at 225 deg, inside the removed part of every
-# symmetric model) and of the hole cylinders about y (seam at x = -a), so no seam lies on a cut plane.
+# symmetric model) and of the hole cylinders about y (seam at x = -a; an x-axis hole is the y-axis one turned by
+# +90 deg about z, seam at y = -a), so no seam lies on a cut plane.
 SEAM_ANGLE_Z = 1.25 * math.pi
 SEAM_ANGLE_HOLE = -0.5 * math.pi
 # choice: the strictured wall profile is an interpolating spline through this many points of the cosine bump
@@ -53,6 +56,9 @@ def _request(cfg: dict, model: str, level: str, symmetry: str):
     if symmetry == "axisymmetric" and sm.stent:
         raise ValueError(f"model {model} has a stent with side holes on the y axis: it is not axisymmetric; "
                          "axisymmetric meshes exist only for the stent-free model")
+    if symmetry == "quarter" and geom.stent_offset:
+        raise ValueError(f"geometry.stent_offset: {geom.stent_offset} m breaks the x = 0 mirror plane, so the quarter "
+                         "model cannot be posed; use symmetry half (y >= 0)")
     if not sm.stent and sm.holes:
         raise ValueError(f"model {model} has {sm.holes} side holes but no stent")
     if sm.holes % 2:
@@ -102,21 +108,24 @@ def _revolved(geom: UreterGeometry, radius) -> list:
     return [d for d in occ.revolve([(2, face)], 0, 0, 0, 0, 0, 1, 2 * math.pi) if d[0] == 3]
 
 
-def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, symmetry: str) -> dict:
+def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, axes: np.ndarray, symmetry: str) -> dict:
     """OCC solids fragmented into conforming regions; returns cell tag -> OCC volume tags."""
-    occ, L = gmsh.model.occ, geom.length
+    occ, L, xs = gmsh.model.occ, geom.length, geom.stent_offset
 
-    def zcyl(r):
-        tag = occ.addCylinder(0, 0, 0, 0, 0, L, r)
-        occ.rotate([(3, tag)], 0, 0, 0, 0, 0, 1, SEAM_ANGLE_Z)
+    def zcyl(r, x0=0.0):
+        tag = occ.addCylinder(x0, 0, 0, 0, 0, L, r)
+        occ.rotate([(3, tag)], x0, 0, 0, 0, 0, 1, SEAM_ANGLE_Z)
         return [(3, tag)]
 
-    def keep(dimtags):  # the x >= 0 (half) or x, y >= 0 (quarter) part
+    def keep(dimtags):  # the x >= 0 (half; y >= 0 for an offset stent) or x, y >= 0 (quarter) part
         if symmetry == "full":
             return dimtags
         big = 2 * geom.ureter_outer_radius
-        y0 = 0.0 if symmetry == "quarter" else -big
-        box = occ.addBox(0, y0, -0.1 * L, big, big - y0, 1.2 * L)
+        if xs:
+            box = occ.addBox(-big, 0, -0.1 * L, 2 * big, big, 1.2 * L)
+        else:
+            y0 = 0.0 if symmetry == "quarter" else -big
+            box = occ.addBox(0, y0, -0.1 * L, big, big - y0, 1.2 * L)
         return occ.intersect(dimtags, [(3, box)])[0]
 
     if geom.strictured:
@@ -126,12 +135,14 @@ def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, symmetry:
     tools = [outer, lumen]
     if sm.stent:
         holes = []
-        for z in z_holes:
+        for z, axis in zip(z_holes, axes):
             ro = 1.5 * geom.stent_outer_radius
-            tag = occ.addCylinder(0, -ro, z, 0, 2 * ro, 0, geom.hole_radius)
-            occ.rotate([(3, tag)], 0, 0, z, 0, 1, 0, SEAM_ANGLE_HOLE)
+            tag = occ.addCylinder(xs, -ro, z, 0, 2 * ro, 0, geom.hole_radius)
+            occ.rotate([(3, tag)], xs, 0, z, 0, 1, 0, SEAM_ANGLE_HOLE)
+            if axis == 0:
+                occ.rotate([(3, tag)], xs, 0, z, 0, 0, 1, 0.5 * math.pi)
             holes.append((3, tag))
-        tube = occ.cut(zcyl(geom.stent_outer_radius), zcyl(geom.stent_inner_radius) + holes)[0]
+        tube = occ.cut(zcyl(geom.stent_outer_radius, xs), zcyl(geom.stent_inner_radius, xs) + holes)[0]
         tools.append(keep(tube))
     _, pieces = occ.fragment(tools[0], [d for t in tools[1:] for d in t])
     occ.synchronize()
@@ -224,7 +235,8 @@ def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, di
     if hole_walls:
         rm = geom.probe_radius
         half = geom.stent_outer_radius - rm
-        fields.append(_threshold(_math(f"Abs({r}-{rm!r})-{half!r}"), s["stent_wall"], s["fluid_bulk"], 0.0,
+        rs = f"Sqrt((x-{geom.stent_offset!r})^2+y^2)" if geom.stent_offset else r
+        fields.append(_threshold(_math(f"Abs({rs}-{rm!r})-{half!r}"), s["stent_wall"], s["fluid_bulk"], 0.0,
                                  width["stent_wall"]))
         dist = gmsh.model.mesh.field.add("Distance")
         gmsh.model.mesh.field.setNumbers(dist, "FacesList", hole_walls)
@@ -302,21 +314,21 @@ def _quality(dim: int) -> dict:
     return {"min": float(q.min()), "p01": float(np.percentile(q, 1)), "median": float(np.median(q))}
 
 
-def _hole_wall_triangles(coords: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    """FLUID_STENT triangles on hole walls: normal across the radial direction (hole axis radial), unlike
-    the stent's lumen and outer walls."""
+def _hole_wall_triangles(coords: np.ndarray, tris: np.ndarray, stent_offset: float = 0.0) -> np.ndarray:
+    """FLUID_STENT triangles on hole walls: normal across the radial direction from the stent axis (x_s, 0)
+    (hole axis radial), unlike the stent's lumen and outer walls."""
     p = coords[tris - 1]
     n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     n /= np.linalg.norm(n, axis=1)[:, None]
-    c = p.mean(axis=1)
+    c = p.mean(axis=1) - np.array([stent_offset, 0.0, 0.0])
     er = c[:, :2] / np.linalg.norm(c[:, :2], axis=1)[:, None]
     return tris[np.abs((n[:, :2] * er).sum(axis=1)) < 0.7]
 
 
-def hole_resolution(coords: np.ndarray, tris: np.ndarray, diameter: float) -> dict:
+def hole_resolution(coords: np.ndarray, tris: np.ndarray, diameter: float, stent_offset: float = 0.0) -> dict:
     """Mean edge length of the hole-wall triangles and the elements across a hole it gives (diameter / it):
     the resolution the mesh has, whatever the size fields asked for."""
-    wall = _hole_wall_triangles(coords, tris)
+    wall = _hole_wall_triangles(coords, tris, stent_offset)
     if not len(wall):
         return {}
     p = coords[wall - 1]
@@ -325,14 +337,17 @@ def hole_resolution(coords: np.ndarray, tris: np.ndarray, diameter: float) -> di
     return {"hole_wall_edge_mean": h, "hole_elements_across": diameter / h}
 
 
-def hole_channels(coords: np.ndarray, tris: np.ndarray) -> list:
+def hole_channels(coords: np.ndarray, tris: np.ndarray, stent_offset: float = 0.0) -> list:
     """Hole channels found in a mesh: connected groups of FLUID_STENT triangles on hole walls
-    (_hole_wall_triangles). Returns the (y sign, z centre) of every channel, sorted by z then y.
+    (_hole_wall_triangles). Returns per channel {"axis", "sign", "z", "across"}: axis "x" or "y" the one its wall
+    lies along (from the stent axis (x_s, 0)), sign the side on it, z its centre and across the [min, max] of its
+    wall's other in-plane coordinate (-a to a for a whole hole, 0 to a for one cut in half by a mirror plane);
+    sorted by z, axis, sign.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    wall = _hole_wall_triangles(coords, tris)
+    wall = _hole_wall_triangles(coords, tris, stent_offset)
     if not len(wall):
         return []
     nodes, local = np.unique(wall, return_inverse=True)
@@ -341,10 +356,16 @@ def hole_channels(coords: np.ndarray, tris: np.ndarray) -> list:
     graph = coo_matrix((np.ones(rows.size), (rows, len(wall) + local.ravel())),
                        shape=(len(wall) + nodes.size,) * 2)
     _, label = connected_components(graph, directed=False)
-    cw = coords[wall - 1].mean(axis=1)
-    out = [(int(np.sign(cw[label[:len(wall)] == k, 1].mean())), float(cw[label[:len(wall)] == k, 2].mean()))
-           for k in np.unique(label[:len(wall)])]
-    return sorted(out, key=lambda t: (round(t[1], 6), t[0]))
+    shift = np.array([stent_offset, 0.0, 0.0])
+    cw = coords[wall - 1].mean(axis=1) - shift
+    out = []
+    for k in np.unique(label[:len(wall)]):
+        c = cw[label[:len(wall)] == k].mean(axis=0)
+        axis = int(abs(c[1]) > abs(c[0]))
+        across = coords[wall[label[:len(wall)] == k].ravel() - 1, 1 - axis] - shift[1 - axis]
+        out.append({"axis": "xy"[axis], "sign": int(np.sign(c[axis])), "z": float(c[2]),
+                    "across": [float(across.min()), float(across.max())]})
+    return sorted(out, key=lambda t: (round(t["z"], 6), t["axis"], t["sign"]))
 
 
 def _axisymmetric(geom: UreterGeometry) -> dict:
@@ -367,6 +388,7 @@ def _axisymmetric(geom: UreterGeometry) -> dict:
 def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidecar_path) -> dict:
     """Build, check and write one mesh (.msh 4.1, physical groups only) and its JSON sidecar (§2.4.1)."""
     geom, sm, z_holes, f = _request(cfg, str(model), level, symmetry)
+    axes = hole_pair_axes(geom, sm)
     dim = 2 if symmetry == "axisymmetric" else 3
     t0 = time.perf_counter()
     gmsh.initialize()
@@ -375,7 +397,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
         gmsh.option.setNumber("General.NumThreads", 1)
         gmsh.option.setNumber("Mesh.RandomSeed", 1)
         gmsh.model.add(f"model{model}_{level}_{symmetry}")
-        regions = _axisymmetric(geom) if dim == 2 else _solids(geom, sm, z_holes, symmetry)
+        regions = _axisymmetric(geom) if dim == 2 else _solids(geom, sm, z_holes, axes, symmetry)
         regions = {k: v for k, v in regions.items() if v}
         facets = _facet_groups(regions, dim, geom)
         for tag, ents in regions.items():
@@ -403,7 +425,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
                         "stent": 0.0}
         measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}
         stent_facets = _elements(2, tags.FLUID_STENT) if tags.FLUID_STENT in facets else None
-        channels = hole_channels(coords, stent_facets) if stent_facets is not None else []
+        channels = hole_channels(coords, stent_facets, geom.stent_offset) if stent_facets is not None else []
         info = {
             "model": str(model), "level": level, "symmetry": symmetry, "size_factor": f,
             "element_type": "triangle" if dim == 2 else "tetrahedron",
@@ -416,9 +438,11 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
                                       "rel_error": (measured[k] / analytic[k] - 1) if analytic[k] else 0.0}
                                   for k in names},
             "hole_pair_z": [float(z) for z in z_holes],
+            "hole_pair_axis": ["xy"[a] for a in axes],
+            "stent_offset": geom.stent_offset,
             "hole_channels_found": len(channels),
-            "hole_channels": [{"y_sign": s, "z": z} for s, z in channels],
-            **(hole_resolution(coords, stent_facets, 2 * geom.hole_radius) if channels else {}),
+            "hole_channels": channels,
+            **(hole_resolution(coords, stent_facets, 2 * geom.hole_radius, geom.stent_offset) if channels else {}),
             "facet_tags": {tags.FACET_NAMES[t]: int(len(_elements(dim - 1, t))) for t in sorted(facets)},
             "optimizer": optimizer,
             "mesh_wall_time_s": wall_time,
@@ -486,7 +510,8 @@ def load_mesh(msh_path, comm):
 
 
 def mirror_mesh(src, dst, symmetry: str) -> dict:
-    """Reflect a half or quarter mesh into the full one (x = 0 mirror, then y = 0 for a quarter) and write
+    """Reflect a half or quarter mesh into the full one (x = 0 mirror, then y = 0 for a quarter; y = 0 for the
+    half model of an offset stent, the plane its symmetry_y facets name) and write
     it to `dst` (.msh 4.1, the same physical groups, the mirror-plane facet groups dropped: they become
     interior). The full mesh is the symmetric mesh's discretisation repeated, node for node, so a full-model
     solve on it differs from the symmetric solve only by what the symmetry conditions change: nothing, in
@@ -508,6 +533,8 @@ def mirror_mesh(src, dst, symmetry: str) -> dict:
     dim = max(d for d, _ in groups)
     if dim != 3:
         raise ValueError(f"mirror_mesh: {src} is not a 3D mesh")
+    if symmetry == "half" and (dim - 1, tags.SYMMETRY_X) not in groups:
+        planes["half"] = [(1, tags.SYMMETRY_Y)]
     tol = 1e-9 * np.abs(coords).max()
     for axis, plane_tag in planes[symmetry]:
         groups.pop((dim - 1, plane_tag), None)

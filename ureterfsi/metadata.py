@@ -45,12 +45,16 @@ VARIABLES = {
                                   "integral |Q_out,lumen| dt + integral |Q_out - Q_out,lumen| dt"),
     "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
     "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
-    "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y) across the outlet-most side hole"),
+    "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y, or x for a rotated pair) across the "
+                                 "outlet-most side hole"),
     "z": ("m", "axial position along the ureter (0 inlet, L outlet)"),
     "probe_time": ("s", "probe time"),
     "hole_offset": ("m", "axial distance from the centre of the outlet-most hole at mid-wall radius"),
     "hole_z": ("m", "axial position of the side hole"),
-    "hole_side": ("1", "side of the side hole on the y axis (+1 or -1)"),
+    "hole_side": ("1", "side of the side hole on its axis (+1 or -1)"),
+    "hole_axis": ("1", "axis of the side hole (0 = x, 1 = y)"),
+    "model_fraction": ("1", "share of the full model a design point meshes (1/4 quarter, 1/2 half, 1 full or r-z), "
+                            "from its mirror planes"),
     "pulse_centre": ("m", "axial position of the centre of the peristaltic pulse"),
     "step_time": ("s", "time at the end of the step"),
     "step_dt": ("s", "time step"),

@@ -21,12 +21,12 @@ def von_mises(sigma):
     return ufl.sqrt(1.5 * ufl.inner(s, s))
 
 
-def inside_radius(mesh, radius: float):
-    """UFL indicator of the reference points closer than `radius` to the z axis (3D): 1 inside, 0 outside.
-    On facets that lie wholly on one side (a conforming mesh, `radius` inside the stent wall) it splits a
-    facet integral exactly."""
+def inside_radius(mesh, radius: float, x_axis: float = 0.0):
+    """UFL indicator of the reference points closer than `radius` to the axis x = x_axis, y = 0 (3D): 1 inside,
+    0 outside. On facets that lie wholly on one side (a conforming mesh, `radius` inside the stent wall) it
+    splits a facet integral exactly."""
     X = ufl.SpatialCoordinate(mesh)
-    return ufl.conditional(ufl.lt(X[0] ** 2 + X[1] ** 2, radius**2), 1.0, 0.0)
+    return ufl.conditional(ufl.lt((X[0] - x_axis) ** 2 + X[1] ** 2, radius**2), 1.0, 0.0)
 
 
 class PointProbe:

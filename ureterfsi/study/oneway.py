@@ -227,10 +227,13 @@ def inner_wall_motion(history: WallHistory, axisymmetric: bool):
     return (lambda x, t: field(x, t, "u")), (lambda x, t: field(x, t, "v"))
 
 
-def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: bool):
+def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: bool, x_still: float = 0.0):
     """Algebraic ALE map of the urine domain, a callable (x, t): the inner-wall motion blended linearly in
-    radius, d(x, t) = w(r, z) (u_r(z, t) e_r + u_z(z, t) e_z), w = clip((r - r_still) / (r_wall(z) - r_still), 0, 1),
-    r_wall(z) the reference inner-wall radius (UreterGeometry.inner_radius: constant, or narrowed by a stricture).
+    radius, d(x, t) = w(r, z) (u_r(z, t) e_r + u_z(z, t) e_z), w = clip((rho - r_still) / (t_w - r_still), 0, 1),
+    rho the distance from the stent axis (x_still, 0) (the ureter axis r unless the stent is offset) and t_w the
+    distance from it to the reference inner wall r_wall(z) along the same ray, t_w = -c.e + sqrt((c.e)^2 - |c|^2 +
+    r_wall^2), c = (x_still, 0), e the ray's direction (t_w = r_wall(z) for a coaxial stent); r_wall(z) the
+    reference inner-wall radius (UreterGeometry.inner_radius: constant, or narrowed by a stricture).
 
     r_still: the radius inside which the mesh stays still (the rigid stent's outer surface; 0 without a
     stent, where w e_r = x / r_wall stays smooth on the axis). The stent lumen and the side holes do not
@@ -240,7 +243,13 @@ def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: boo
     def field(x, t):
         r, z = (x[0], x[1]) if axisymmetric else (np.hypot(x[0], x[1]), x[2])
         ur, uz = history.inner_displacement(z, t)
-        w = np.clip((r - r_still) / (r_wall(z) - r_still), 0.0, 1.0)
+        if x_still:
+            rho = np.hypot(x[0] - x_still, x[1])
+            ce = x_still * (x[0] - x_still) / np.maximum(rho, 1e-300)
+            t_wall = -ce + np.sqrt(ce**2 - x_still**2 + r_wall(z) ** 2)
+            w = np.clip((rho - r_still) / (t_wall - r_still), 0.0, 1.0)
+        else:
+            w = np.clip((r - r_still) / (r_wall(z) - r_still), 0.0, 1.0)
         if axisymmetric:
             return np.vstack([w * ur, w * uz])
         wr = w * ur / np.maximum(r, 1e-300)
@@ -260,7 +269,7 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
         g = UreterGeometry.from_config(cfg)
         has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
         blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius,
-                             axisymmetric)
+                             axisymmetric, g.stent_offset if has_stent else 0.0)
     scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
                                mesh_motion=blend)
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
@@ -381,7 +390,7 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
     if model.stent and not axisymmetric:
         _, _, stent_material = materials(cfg)
         stent = QuasiStaticStent(extract(mesh, cell_tags, facet_tags, [tags.STENT]), stent_material, pb,
-                                 spec.symmetry != "full", np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
+                                 spec.symmetry != "full", g.stent_probe_points(z))
     obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
                        stent=stent)
     diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)

@@ -4,9 +4,9 @@ Probes (paper §3, Figs. 3-10, and beyond):
   every step   outlet/inlet volumetric flux, mean axial outlet velocity (the paper's measure), maximum
                von Mises stress over the stent and where it occurs, fluid volume, flux through every
                side hole, maximum wall displacement, Newton iterations;
-  probe times  von Mises along the probe line (r = 0.75 mm, plane y = 0, away from the holes), ureter
-               outer-wall radial displacement vs z, velocity along the hole axis (y) across the
-               outlet-most hole at mid-wall radius.
+  probe times  von Mises along the probe line (r = 0.75 mm from the stent axis, plane y = 0, away from the
+               holes), ureter outer-wall radial displacement vs z, velocity along the hole axis (y, or x
+               for a rotated pair) across the outlet-most hole at mid-wall radius.
 Every variable carries CF `units` and `long_name`; the dataset carries provenance.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ from .. import tags
 from ..fsi import Observer
 from ..fsi import physics
 from ..fsi.problem import MonolithicFSI
-from ..geometry import HOLE_FRACTION, SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_positions
+from ..geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
 from ..metadata import cf_meta
 from ..probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, inside_radius, von_mises
 from ..provenance import provenance_attrs
@@ -105,17 +105,23 @@ class UreterProbes(Observer):
 
         self.has_stent = model.stent and not self.axisymmetric
         if self.has_stent:
-            self.stent = stent or CoupledStent(pb, np.c_[np.full_like(z, g.probe_radius), np.zeros_like(z), z])
-            # holes: channel cells (fluid, r_i < R < r_o) grouped by pair position and side
+            xs = g.stent_offset
+            self.stent = stent or CoupledStent(pb, g.stent_probe_points(z))
+            # holes (z, side, axis 0 = x / 1 = y): the model keeps the + side of each cut plane (normal 0 = x, 1 = y;
+            # half: x = 0, or y = 0 for an offset stent). A hole on a plane's normal axis has only its + side in the
+            # model; a hole whose axis lies in a cut plane is cut in half by it (fraction 0.5).
+            cut = {"full": (), "half": (1,) if xs else (0,), "quarter": (0, 1)}[symmetry]
             self.hole_z = hole_pair_positions(g, model)
-            sides = [1.0] if symmetry == "quarter" else [1.0, -1.0]
-            self.holes = [(zk, sd) for zk in self.hole_z for sd in sides]
+            axes = hole_pair_axes(g, model)
+            self.holes = [(zk, sd, int(a)) for zk, a in zip(self.hole_z, axes)
+                          for sd in ([1.0] if a in cut else [1.0, -1.0])]
+            self.hole_fraction = np.array([0.5 if 1 - a in cut else 1.0 for _, _, a in self.holes])
             Q = fem.FunctionSpace(mesh, ("DG", 0))
             Xc = ufl.SpatialCoordinate(mesh)
-            R = ufl.sqrt(Xc[0] ** 2 + Xc[1] ** 2)
-            e_r = ufl.as_vector([Xc[0] / R, Xc[1] / R, 0.0])
+            R = ufl.sqrt((Xc[0] - xs) ** 2 + Xc[1] ** 2)
+            e_r = ufl.as_vector([(Xc[0] - xs) / R, Xc[1] / R, 0.0])
             grad_chi = e_r / (g.stent_outer_radius - g.stent_inner_radius)
-            # Q_k = int_channel J F^-1 (v - w) . Grad chi dX, chi = (R - r_i)/(r_o - r_i): flux through
+            # Q_k = int_channel J F^-1 (v - w) . Grad chi dX, chi = (R - r_i)/(r_o - r_i), R from the stent axis: flux through
             # any surface R = const of the channel (exact for a divergence-free field); outward positive.
             self.hole_form = fem.form(J * ufl.dot(ufl.inv(F) * rel, grad_chi) * ufl.TestFunction(Q) * dx(tags.FLUID))
             self.hole_vec = fem_petsc.create_vector(self.hole_form)
@@ -123,19 +129,24 @@ class UreterProbes(Observer):
             fluid = pb.cells([tags.FLUID])
             fluid = fluid[fluid < n_local]
             mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
-            Rm = np.hypot(mid[:, 0], mid[:, 1])
+            d = np.c_[mid[:, 0] - xs, mid[:, 1]]
+            Rm = np.hypot(d[:, 0], d[:, 1])
             chan = (Rm > g.stent_inner_radius) & (Rm < g.stent_outer_radius)
             self.hole_cells = []
-            for zk, sd in self.holes:
-                sel = chan & (np.abs(mid[:, 2] - zk) < 2 * g.hole_radius) & (np.sign(mid[:, 1]) == sd)
+            for zk, sd, a in self.holes:   # a channel cell on the hole's own axis, on its side
+                sel = (chan & (np.abs(mid[:, 2] - zk) < 2 * g.hole_radius) & (np.sign(d[:, a]) == sd)
+                       & (np.abs(d[:, a]) > np.abs(d[:, 1 - a])))
                 self.hole_cells.append(Q.dofmap.list.array[fluid[sel]])
-            zh = float(self.hole_z.max())
+            k = int(np.argmax(self.hole_z))
+            zh, self.hole_probe_axis = float(self.hole_z[k]), int(axes[k])
             s = np.linspace(-g.hole_radius, g.hole_radius, N_HOLE)
             self.hole_s = s
-            self.hole_probe = PointProbe(mesh, np.c_[np.zeros_like(s), np.full_like(s, g.probe_radius), zh + s])
+            on_axis = np.zeros((s.size, 2))
+            on_axis[:, self.hole_probe_axis] = g.probe_radius
+            self.hole_probe = PointProbe(mesh, np.c_[xs + on_axis[:, 0], on_axis[:, 1], zh + s])
             self.outlet_hole_z = zh
-            # the stent-lumen share of the end-face fluxes (R < mid-wall radius: inside the stent)
-            lumen = inside_radius(mesh, g.probe_radius)
+            # the stent-lumen share of the end-face fluxes (R < mid-wall radius from the stent axis: inside the stent)
+            lumen = inside_radius(mesh, g.probe_radius, xs)
             self.forms["outlet_lumen_flux"] = fem.form(lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.OUTLET))
             self.forms["inlet_lumen_flux"] = fem.form(-lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.INLET))
         self.series = {k: [] for k in self.series_names()}
@@ -181,7 +192,7 @@ class UreterProbes(Observer):
             arr = vec.array
             local = np.array([arr[c[c < arr.size]].sum() for c in self.hole_cells])
             flux = _allreduce_sum(self.comm, local)
-            s["hole_flux"].append((flux / HOLE_FRACTION[self.symmetry]).tolist())
+            s["hole_flux"].append((flux / self.hole_fraction).tolist())
         if any(abs(pb.time - t) < 1e-9 for t in self.probe_times):
             self.snapshot_times.append(pb.time)
             self.snapshots["wall_radial_displacement"].append(wall.tolist())
@@ -189,7 +200,8 @@ class UreterProbes(Observer):
                 self.snapshots["stent_von_mises_line"].append(
                     self.stent.probe(self.stent.von_mises.function)[:, 0].tolist())
                 self.velocity.x.array[:] = pb.field("velocity").x.array
-                self.snapshots["hole_velocity_y"].append(self.hole_probe(self.velocity)[:, 1].tolist())
+                self.snapshots["hole_velocity_y"].append(
+                    self.hole_probe(self.velocity)[:, self.hole_probe_axis].tolist())
 
     def state(self) -> dict:
         return {"series": self.series, "snapshots": self.snapshots, "snapshot_times": self.snapshot_times}
@@ -232,7 +244,8 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     if obs.has_stent:
         ds = ds.assign_coords(hole_offset=_cf(xr.DataArray(obs.hole_s, dims="hole_offset"), "hole_offset"),
                               hole_z=_cf(xr.DataArray([h[0] for h in obs.holes], dims="hole"), "hole_z"),
-                              hole_side=_cf(xr.DataArray([h[1] for h in obs.holes], dims="hole"), "hole_side"))
+                              hole_side=_cf(xr.DataArray([h[1] for h in obs.holes], dims="hole"), "hole_side"),
+                              hole_axis=_cf(xr.DataArray([h[2] for h in obs.holes], dims="hole"), "hole_axis"))
         ds["hole_flux"] = _cf(xr.DataArray(np.asarray(obs.series["hole_flux"]), dims=("time", "hole")), "hole_flux")
         ds.attrs["outlet_hole_z"] = obs.outlet_hole_z
     steps = {"step_time": [r.time for r in records], "step_dt": [r.dt for r in records],

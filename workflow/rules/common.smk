@@ -262,7 +262,7 @@ def design_mesh_inputs(w):
     """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
     st, p = DESIGN_MESHES[w.mesh_id]
     return json.dumps(
-        ureter_designs.mesh_sections(p.config, st.model, st.level, st.symmetry),
+        ureter_designs.mesh_sections(p.config, st.model, st.level, p.symmetry),
         sort_keys=True,
     )
 
@@ -279,13 +279,14 @@ def design_solve_inputs(w):
 def design_solve_study(w):
     """The configuration entering a design point's solve, with its rung and symmetry (rerun trigger)."""
     st = DESIGNS[w.design_study]
-    sections = ureter_designs.solve_sections(st.point(w.point).config, st.model)
+    p = st.point(w.point)
+    sections = ureter_designs.solve_sections(p.config, st.model)
     return json.dumps(
-        sections | {"rung": st.rung, "symmetry": st.symmetry}, sort_keys=True
+        sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True
     )
 
 
 def design_solve_mem_mb(w):
     """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
     st = DESIGNS[w.design_study]
-    return solve_mem_mb(st.rung, st.symmetry, st.level)
+    return solve_mem_mb(st.rung, st.point(w.point).symmetry, st.level)

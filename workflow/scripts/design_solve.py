@@ -11,6 +11,7 @@ w = snakemake.wildcards  # noqa: F821
 study = studies(snakemake.config)[w.design_study]  # noqa: F821
 with open(snakemake.log[0], "w") as log:  # noqa: F821
     configure_logging(log)
-    spec = RunSpec(study.model, study.level, study.symmetry, snakemake.input.mesh)  # noqa: F821
-    solve(study.point(w.point).config, spec, study.rung, snakemake.output[0],  # noqa: F821
+    point = study.point(w.point)
+    spec = RunSpec(study.model, study.level, point.symmetry, snakemake.input.mesh)  # noqa: F821
+    solve(point.config, spec, study.rung, snakemake.output[0],  # noqa: F821
           snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821
