@@ -409,11 +409,11 @@ def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     gives the full model's flows on its mirror image (ureterfsi.mesh.mirror_mesh, node for node) to round-off, hole
     by hole (the +y holes whole, the x holes cut in half by the plane) and in the mirror-weighted hole total."""
     import netCDF4  # noqa: F401
-    from ureterfsi import oneway
+    from ureterfsi.study import oneway
     from ureterfsi.config import load_config_files
     from ureterfsi.designs import hole_mirror_weights
     from ureterfsi.mesh import build_mesh, mirror_mesh
-    from ureterfsi.study import RunSpec
+    from ureterfsi.study.options import RunSpec
 
     cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml"]),
                       {"geometry": {"stent_offset": 1e-3, "hole_arrangement": "rotated_90"}})
