@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .config import ConfigError, _fmt, validate_config, wall_sections
+from .geometry import SYMMETRY_FRACTION, UreterGeometry
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
@@ -188,8 +189,6 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
 def point_symmetry(cfg: dict, base_symmetry: str) -> str:
     """A design point's mesh symmetry: axisymmetric if its base model runs so (no stent), else the smallest model
     its mirror planes allow (ureterfsi.geometry.UreterGeometry.symmetry)."""
-    from .geometry import UreterGeometry
-
     return base_symmetry if base_symmetry == "axisymmetric" else UreterGeometry.from_config(cfg).symmetry
 
 
@@ -384,7 +383,6 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
            "wall_time")
-SYMMETRY_FACTOR = {"full": 1, "half": 2, "quarter": 4, "axisymmetric": 1}   # full model / meshed model
 SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement")
 
 
@@ -464,7 +462,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
     vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
-    vars_["model_fraction"] = (("design",), np.array([1.0 / SYMMETRY_FACTOR[p.symmetry] for p in st.points]))
+    vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
               "hole_axis": (("design", "hole"), hole_axis)}

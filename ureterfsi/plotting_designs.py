@@ -12,7 +12,7 @@ import xarray as xr  # noqa: E402
 from .designs import PARAMETERS, standardised_regression_coefficients  # noqa: E402
 
 QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",
-              "peak_stent_von_mises", "peak_wall_displacement")
+              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement")
 
 
 def _parameters(ds: xr.Dataset) -> list:
