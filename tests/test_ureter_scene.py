@@ -90,7 +90,7 @@ def test_stent_probes_and_diagnostics(mini):
     assert np.all(ds["newton_iterations"].values >= 1)
     for name, var in ds.data_vars.items():
         assert "units" in var.attrs and "long_name" in var.attrs, name
-    for key in ("config_hash", "git_commit", "model", "mesh_level", "version_dolfinx"):
+    for key in ("config_hash", "git_commit", "model", "mesh_level", "version_dolfinx", "version_snakemake"):
         assert key in ds.attrs
 
 

@@ -284,6 +284,8 @@ def test_report_holds_every_figure(e2e):
     assert "table1.md" in html
     # captions are Jinja-rendered with the figure instants of the configuration
     assert "t = 0.04 s" in html and "snakemake.params" not in html
+    # the landing text (workflow/report/workflow.rst), rendered with the configuration
+    assert "fluid-structure interaction of a stented ureter" in html and "snakemake.config" not in html
 
 
 def planned_jobs(text: str) -> list[dict]:

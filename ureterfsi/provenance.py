@@ -44,12 +44,18 @@ def package_versions() -> dict:
     """Versions of the numerical stack that produced a result."""
     import importlib
 
+    from importlib import metadata
+
     out = {}
     for name in ("ureterfsi", "dolfinx", "ufl", "ffcx", "petsc4py", "gmsh", "numpy", "xarray"):
         try:
             out[name] = str(importlib.import_module(name).__version__)
         except Exception:  # a missing optional package is recorded as such
             out[name] = "not installed"
+    try:        # the workflow engine, from its distribution record (importing it costs ~1 s)
+        out["snakemake"] = metadata.version("snakemake")
+    except metadata.PackageNotFoundError:
+        out["snakemake"] = "not installed"
     return out
 
 
