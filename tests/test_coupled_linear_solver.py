@@ -204,3 +204,21 @@ def test_refusals_and_failure_report():
     pb.solve_steady()               # the rest state: no linear solve
     with pytest.raises(NewtonDivergence, match="after 1 GMRES iterations"):
         pb.step(2e-3)
+
+
+def test_solver_options_go_with_their_problem():
+    """PETSc's options database holds at most 512 entries per process (a suite or a stability matrix poses
+    hundreds of problems in one): each problem's options live under its prefix and are removed with it."""
+    import gc
+
+    from ureterfsi import verification as V
+    from ureterfsi.fsi import MonolithicFSI
+    gc.collect()
+    base = set(PETSc.Options().getAll())
+    pb = MonolithicFSI(V.channel_scene(), SolverOptions(linear_solver="block_gauss_seidel"))
+    prefix = pb.options_prefix
+    assert len([k for k in PETSc.Options().getAll() if k.startswith(prefix)]) > 10
+    del pb
+    gc.collect()
+    assert not [k for k in PETSc.Options().getAll() if k.startswith(prefix)]
+    assert set(PETSc.Options().getAll()) <= base

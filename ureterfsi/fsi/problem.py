@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import math
 import time as _time
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,6 +108,15 @@ def dirichlet_bcs(cond, base, facet_tags) -> list:
             bc = fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets))
         out.append((bc, g, c))
     return out
+
+
+def forget_options(prefix: str) -> None:
+    """Delete every PETSc option under `prefix` (once the solvers that read them are gone)."""
+    if PETSc.Sys.isFinalized():
+        return
+    opts = PETSc.Options()
+    for key in [k for k in opts.getAll() if k.startswith(prefix)]:
+        opts.delValue(key)
 
 
 class NewtonDivergence(RuntimeError):
@@ -235,6 +245,10 @@ class MonolithicFSI:
             self.mesh_jacobian_form = fem.form(ufl.derivative(Rm, self.x))
 
         # --- constraints --------------------------------------------------------------------
+        # PETSc options of this problem's solvers live under one prefix, removed when the problem goes (the
+        # options database holds at most 512 entries per process)
+        self.options_prefix = f"ureterfsi_{id(self)}_"
+        weakref.finalize(self, forget_options, self.options_prefix).atexit = False
         self.counters = {"factorisations": 0, "reused_solves": 0}
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
                         "mesh_motion": 0.0}
@@ -264,7 +278,7 @@ class MonolithicFSI:
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
         self.ksp = PETSc.KSP().create(self.comm)
-        prefix = f"ureterfsi_{id(self)}_"
+        prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setOperators(self.A)
         self.linear_solver = self._linear_solver(prefix)
@@ -532,7 +546,7 @@ class MonolithicFSI:
         self.mesh_motion = Extension(d, self.mesh_bcs, a, L, self.comm,
                                      iterative=limit is not None and unknowns > limit,
                                      package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
-                                     prefix=f"ureterfsi_mesh_{id(self)}_", counters=self.counters)
+                                     prefix=f"{self.options_prefix}mesh_", counters=self.counters)
 
     @property
     def mesh_motion_solver(self) -> str:
