@@ -215,12 +215,24 @@ def annulus_axisymmetric_scene(a: Annulus, n):
                  axisymmetric=True, name="annular-poiseuille")
 
 
+def _quadratic_tetrahedra(h):
+    """The current gmsh model meshed at uniform size h with quadratic tetrahedra, as dolfinx (mesh, cell tags,
+    facet tags)."""
+    import gmsh
+    from dolfinx.io import gmshio
+
+    gmsh.option.setNumber("Mesh.MeshSizeMin", h)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    gmsh.model.mesh.generate(3)
+    gmsh.model.mesh.setOrder(2)
+    return gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+
+
 def annulus_3d_scene(a: Annulus, h):
     """Short 3D annulus (gmsh OCC, second-order geometry), z along the axis; same conditions as the
     axisymmetric scene (no slip, transverse velocity zero on the end sections, displacement fixed).
     Facets: 1 inlet, 2 outlet, 3 r = R1, 4 r = R2."""
     import gmsh
-    from dolfinx.io import gmshio
 
     gmsh.initialize()
     try:
@@ -244,11 +256,7 @@ def annulus_3d_scene(a: Annulus, h):
                 groups[3 if bb[3] < 0.5 * (a.R1 + a.R2) else 4].append(tag)
         for t, surfs in groups.items():
             gmsh.model.addPhysicalGroup(2, surfs, t)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.model.mesh.setOrder(2)
-        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+        mesh, ct, ft = _quadratic_tetrahedra(h)
     finally:
         gmsh.finalize()
     return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], a.fluid),
@@ -515,7 +523,6 @@ def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
     u_y = v_y = 0 on y = 0, u_z = v_z = 0 on both end faces, outer surface free, and on the inner surface a
     follower pressure p(t) (or the dead load P N = -p N). Facets: 1 inner, 2 outer, 3 x = 0, 4 y = 0, 5 ends."""
     import gmsh
-    from dolfinx.io import gmshio
 
     gmsh.initialize()
     try:
@@ -536,11 +543,7 @@ def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
         for tag, side in zip((4, 2, 3, 1), lateral):
             gmsh.model.addPhysicalGroup(2, [side], tag)
         gmsh.model.addPhysicalGroup(2, [surf, top], 5)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", h)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.model.mesh.setOrder(2)
-        mesh, ct, ft = gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=3)
+        mesh, ct, ft = _quadratic_tetrahedra(h)
     finally:
         gmsh.finalize()
     if follower:
