@@ -21,13 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import ufl
-from dolfinx import cpp as _cpp
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import physics
+from . import physics, sparsity
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              direct_package)
 from .materials import LinearElastic, MooneyRivlin
@@ -87,7 +86,7 @@ class SolverOptions:
     # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
     mesh_motion_coupling: str = "monolithic"
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
-    # (MonolithicFSI._coupled_matrix); "mixed_element" every dof of a cell with every other (the same matrix)
+    # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
 
 
@@ -264,16 +263,18 @@ class MonolithicFSI:
         if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
             raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
         own = opts.jacobian_sparsity == "couplings"
+        solids = [(self.cells(tuple(s.tags)), isinstance(s.material, MooneyRivlin)) for s in scene.solids]
         if self.segregated:
-            self.A = self._flow_matrix()
+            self.A = sparsity.flow_matrix(W, self.field_names)
         else:
-            self.A = self._coupled_matrix() if own else fem_petsc.create_matrix(self.jacobian_form)
+            self.A = (sparsity.coupled_matrix(W, self.field_names, self.cells(fluid_tags), solids) if own
+                      else fem_petsc.create_matrix(self.jacobian_form))
         self.b = fem_petsc.create_vector(self.residual_form)
         self._b_free = self.b.duplicate()
         self._reaction_ready = False    # _b_free holds the residual of the last accepted state (assemble_reaction)
         if self.mesh_form is not None:
-            self.Am = self._coupled_matrix(mesh_rows_only=True) if own else \
-                fem_petsc.create_matrix(self.mesh_jacobian_form)
+            self.Am = (sparsity.coupled_matrix(W, self.field_names, self.cells(fluid_tags), solids, mesh_rows_only=True)
+                       if own else fem_petsc.create_matrix(self.mesh_jacobian_form))
             self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
@@ -391,78 +392,6 @@ class MonolithicFSI:
         offset = self.W.dofmap.index_map.local_range[0] * bs
         self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
         self._mesh_excluded_local = rows.astype(np.int32)
-
-    def _flow_matrix(self):
-        """Jacobian matrix of a fluid-alone Newton system with only the nonzeros its form has: every
-        (velocity, pressure) coupling of a cell and the diagonal of the mirrored mesh-displacement rows. The
-        form's sparsity would couple every dof of a cell (5.2e7 instead of 1.4e7 entries on the coarse model 3,
-        Jacobian assembly 2.9 instead of 1.6 s); the displacement rows and columns hold exact zeros there (the
-        flow rows see the mesh displacement as a coefficient)."""
-        flow = [f for f in self.field_names if f != "displacement"]
-        return self._pattern_matrix([(np.arange(self._num_cells(), dtype=np.int32), flow, flow)],
-                                    np.unique(self._cell_dofs("displacement")))
-
-    def _coupled_matrix(self, mesh_rows_only=False):
-        """Jacobian matrix of the coupled Newton system with the couplings its forms have, per cell region
-        (rows <- columns): fluid cells v, p <- v, p, u (ALE Navier-Stokes, open boundaries) and u <- u (mesh
-        motion); solid cells v <- v, u (+ pi) (inertia, stress), u <- u, v (kinematics), pi <- u, pi
-        (Mooney-Rivlin); every diagonal (pinned and Dirichlet rows). The mixed element's pattern couples every
-        dof of a cell with every other: 10 mm ureter segment 2.40e7 -> 1.89e7 entries (docs/performance.md).
-        `mesh_rows_only`: the mesh-motion Jacobian (u <- u on fluid cells, and the diagonal)."""
-        fluid = self.cells(self.fluid_tags)
-        blocks = [(fluid, ["displacement"], ["displacement"])]
-        if not mesh_rows_only:
-            flow = [f for f in ("velocity", "pressure") if f in self.index]
-            blocks.append((fluid, flow, flow + ["displacement"]))
-            for s in self.scene.solids:
-                cells = self.cells(tuple(s.tags))
-                pi = ["solid_pressure"] if isinstance(s.material, MooneyRivlin) else []
-                blocks += [(cells, ["velocity"], ["velocity", "displacement"] + pi),
-                           (cells, ["displacement"], ["velocity", "displacement"]),
-                           (cells, pi, ["displacement"] + pi)]
-        imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
-        return self._pattern_matrix(blocks, np.arange(imap.size_local * bs, dtype=np.int32))
-
-    def _num_cells(self) -> int:
-        """Local cells, ghosts included."""
-        cmap = self.mesh.topology.index_map(self.mesh.topology.dim)
-        return cmap.size_local + cmap.num_ghosts
-
-    def _cell_dofs(self, field) -> np.ndarray:
-        """(cells, dofs per cell) local dofs of one field in the numbering of W."""
-        return self.W.sub(self.index[field]).dofmap.list.array.reshape(self._num_cells(), -1)
-
-    def _pattern_matrix(self, blocks, diagonal):
-        """PETSc matrix whose nonzeros are, for each (cells, row fields, column fields) of `blocks`, every row
-        dof of a cell coupled with every column dof of that cell, plus the local rows `diagonal`; the structure
-        fixed with zeros. Assembly inserts the whole mixed element's cell matrices (64 x 64 on a P2-P2-P1
-        tetrahedron): entries outside the pattern must be exact zeros, which PETSc skips before searching their
-        row (MAT_IGNORE_ZERO_ENTRIES: coarse one-way model 3, assembly 2.2-2.4 -> 1.5-1.9 s) - except on the
-        diagonal: a cell's diagonal outside the pattern fails the insertion of that cell matrix (silently in a
-        release build of dolfinx), hence every diagonal a cell reaches is in the pattern."""
-        imap, bs = self.W.dofmap.index_map, self.W.dofmap.index_map_bs
-        pattern = _cpp.la.SparsityPattern(self.comm, [imap, imap], [bs, bs])
-        for cells, rows, cols in blocks:
-            if not rows or cells.size == 0:
-                continue
-            r = np.hstack([self._cell_dofs(f) for f in rows])[cells].astype(np.int32)
-            c = np.hstack([self._cell_dofs(f) for f in cols])[cells].astype(np.int32)
-            for ri, ci in zip(r, c):
-                pattern.insert(ri, ci)
-        pattern.insert_diagonal(np.asarray(diagonal, dtype=np.int32))
-        pattern.assemble()
-        A = _cpp.la.petsc.create_matrix(self.comm, pattern)
-        # fix the structure with zeros: the graph's owned rows, its columns in the pattern's own numbering
-        graph, owned = pattern.graph, imap.size_local * bs
-        offsets = graph.offsets[:owned + 1]
-        cols = pattern.column_index_map().local_to_global(graph.array[:offsets[-1]])
-        A.setValuesCSR(offsets.astype(PETSc.IntType), cols.astype(PETSc.IntType),
-                       np.zeros(cols.size, dtype=PETSc.ScalarType))
-        A.assemble()
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, False)
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATIONS, False)
-        A.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, True)
-        return A
 
     def field_is(self, groups: dict) -> list:
         """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
