@@ -86,7 +86,7 @@ def main(argv=None):
         case = run["case"] if run else args.case
     else:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
-        options = th.SolverOptions(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening)
+        options = th.transient_options(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening)
         res = th.run_transient(args.case, args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
                                options=options, series_path=args.json)
         case, series = args.case, {k: v.tolist() for k, v in res.series.items()}

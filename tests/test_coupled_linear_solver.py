@@ -164,6 +164,23 @@ def test_a_wrong_split_does_not_converge(lu_run):
     assert result["wrong"][0] < 0, result
 
 
+def test_mumps_workspace_reaches_every_factorisation(lu_run):
+    """SolverOptions.mumps_workspace_percent is ICNTL(14) of every MUMPS factor the strategies create, read back
+    from the factors: the whole system, each block_gauss_seidel split, and the flow block and mesh-motion LU of a
+    segregated fluid-alone solve; the default leaves MUMPS's own 20 %."""
+    from test_fluid_alone import run as fluid_run
+    assert lu_run[0].factor_matrix().getMumpsIcntl(14) == 20
+    whole, _ = _run("mumps", steps=1, mumps_workspace_percent=73)
+    assert whole.factor_matrix().getMumpsIcntl(14) == 73
+    blocks, _ = _run("block_gauss_seidel", steps=1, mumps_workspace_percent=73)
+    factors = {n: sub.getPC().getFactorMatrix() for n, sub in blocks.linear_solver.sub_ksps().items()}
+    assert {n: f.getMumpsIcntl(14) for n, f in factors.items()} == {"solid": 73, "mesh": 73, "flow": 73}
+    _, _, fluid = fluid_run(2e-3, 1, "segregated", mumps_workspace_percent=73)
+    assert fluid.mesh_motion_solver == "lu"
+    assert fluid.factor_matrix().getMumpsIcntl(14) == 73
+    assert fluid.mesh_motion.ksp.getPC().getFactorMatrix().getMumpsIcntl(14) == 73
+
+
 def test_turek_hron_fsi1_quantities_equal_the_lu_path():
     th = pytest.importorskip("ureterfsi.scenes.turek_hron")
     lu = th.run_fsi1(0.5, options=SolverOptions(linear_solver="mumps"))

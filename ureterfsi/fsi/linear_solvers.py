@@ -26,6 +26,7 @@ from petsc4py import PETSc
 SPLITS = ("solid", "mesh", "flow")
 KRYLOV = ("block_gauss_seidel",)            # linear_solver values handled here
 DIRECT = ("mumps", "superlu_dist", "superlu", "umfpack")
+MUMPS_WORKSPACE_PERCENT = 20                # MUMPS's own default ICNTL(14)
 
 
 def direct_package(linear_solver: str) -> str:
@@ -34,28 +35,35 @@ def direct_package(linear_solver: str) -> str:
     return linear_solver if linear_solver in DIRECT else "mumps"
 
 
-def block_gauss_seidel_options(rtol: float, max_iterations: int) -> dict:
+def mumps_options(workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
+    """PETSc options (under a factor's prefix) of every MUMPS LU of the engine: METIS nested-dissection ordering
+    (ICNTL(7) = 5, which suits 3D meshes) and the workspace margin over MUMPS's estimate in per cent (ICNTL(14))."""
+    return {"mat_mumps_icntl_7": 5, "mat_mumps_icntl_14": int(workspace_percent)}
+
+
+def block_gauss_seidel_options(rtol: float, max_iterations: int,
+                               workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
     """PETSc options (under the KSP prefix) of BlockGaussSeidel: right-preconditioned GMRES (the residual it
-    tests is the true one), multiplicative fieldsplit, MUMPS LU with METIS ordering on every split."""
+    tests is the true one), multiplicative fieldsplit, MUMPS LU (mumps_options) on every split."""
     opts = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "ksp_pc_side": "right", "ksp_rtol": rtol,
             "ksp_atol": 0.0, "ksp_max_it": max_iterations, "ksp_norm_type": "unpreconditioned",
             "pc_type": "fieldsplit", "pc_fieldsplit_type": "multiplicative"}
     for name in SPLITS:
         opts |= {f"fieldsplit_{name}_ksp_type": "preonly", f"fieldsplit_{name}_pc_type": "lu",
-                 f"fieldsplit_{name}_pc_factor_mat_solver_type": "mumps",
-                 f"fieldsplit_{name}_mat_mumps_icntl_7": 5}
+                 f"fieldsplit_{name}_pc_factor_mat_solver_type": "mumps"}
+        opts |= {f"fieldsplit_{name}_{k}": v for k, v in mumps_options(workspace_percent).items()}
     return opts
 
 
-def flow_lu_options(package: str) -> dict:
+def flow_lu_options(package: str, workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
     """PETSc options (under the KSP prefix) of the segregated direct solve: PCFieldSplit additive over the
-    splits "mirror" (Jacobi) and "flow" (LU by `package`; METIS ordering for MUMPS)."""
+    splits "mirror" (Jacobi) and "flow" (LU by `package`; mumps_options for MUMPS)."""
     opts = {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",
             "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
             "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
             "fieldsplit_flow_pc_factor_mat_solver_type": package}
     if package == "mumps":
-        opts["fieldsplit_flow_mat_mumps_icntl_7"] = 5
+        opts |= {f"fieldsplit_flow_{k}": v for k, v in mumps_options(workspace_percent).items()}
     return opts
 
 
@@ -101,10 +109,10 @@ def mumps_status(factor) -> str:
 
 
 class WholeSystemLU(LinearSolver):
-    """LU of the whole Newton system by a direct package (MUMPS with the METIS nested-dissection ordering,
-    which suits 3D meshes)."""
+    """LU of the whole Newton system by a direct package (MUMPS with mumps_options)."""
 
-    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, counters: dict):
+    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, counters: dict,
+                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
         super().__init__(ksp, counters)
         self.package = package
         ksp.setType("preonly")
@@ -112,7 +120,9 @@ class WholeSystemLU(LinearSolver):
         pc.setType("lu")
         pc.setFactorSolverType(package)
         if package == "mumps":
-            PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5
+            o = PETSc.Options()
+            for key, value in mumps_options(workspace_percent).items():
+                o[f"{prefix}{key}"] = value
 
     def factor_matrix(self):
         return self.ksp.getPC().getFactorMatrix()
@@ -130,11 +140,12 @@ class FlowBlockLU(LinearSolver):
     3.7 s (flow block), kept solve 0.17 vs 0.13 s, LU memory 1 294 vs 1 149 MB. (Before the own sparsity,
     the whole-matrix LU took 20-37 s and 4.2 GB.)"""
 
-    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, counters: dict):
+    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, counters: dict,
+                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
         super().__init__(ksp, counters)
         self.package = package
         o = PETSc.Options()
-        for key, value in flow_lu_options(package).items():
+        for key, value in flow_lu_options(package, workspace_percent).items():
             o[f"{prefix}{key}"] = value
         pc = ksp.getPC()
         pc.setType("fieldsplit")
@@ -186,7 +197,8 @@ class BlockGaussSeidel(LinearSolver):
     ("block_extraction"), in each block's set-up ("{split}_factorise") and in GMRES ("krylov")."""
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, splits: dict, rtol: float, max_iterations: int,
-                 refactorise_iterations: int, counters: dict, timings: dict, kept=("solid", "mesh")):
+                 refactorise_iterations: int, counters: dict, timings: dict, kept=("solid", "mesh"),
+                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
         if set(splits) != set(SPLITS) or any(splits[n].getSize() == 0 for n in SPLITS):
             sizes = {n: splits[n].getSize() for n in splits}
             raise ValueError(f"linear_solver 'block_gauss_seidel' needs non-empty splits {SPLITS} (a scene with a "
@@ -196,7 +208,7 @@ class BlockGaussSeidel(LinearSolver):
             raise ValueError(f"BlockGaussSeidel kept blocks must be among {SPLITS}, got {sorted(unknown)}")
         self.ksp, self.kept, self.refactorise_iterations = ksp, tuple(kept), refactorise_iterations
         o = PETSc.Options()
-        for key, value in block_gauss_seidel_options(rtol, max_iterations).items():
+        for key, value in block_gauss_seidel_options(rtol, max_iterations, workspace_percent).items():
             o[f"{prefix}{key}"] = value
         pc = ksp.getPC()
         pc.setType("fieldsplit")

@@ -8,6 +8,8 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from .linear_solvers import MUMPS_WORKSPACE_PERCENT, mumps_options
+
 MISMATCH_LIMIT = 0.05       # PrescribedMap: largest disagreement with the boundary motion, of the displacement
 
 
@@ -46,7 +48,7 @@ class Extension:
     mismatch = 0.0
 
     def __init__(self, displacement: fem.Function, bcs: list, a, L, comm, *, iterative: bool, package: str,
-                 rtol: float, prefix: str, counters: dict):
+                 rtol: float, prefix: str, counters: dict, workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
         self.displacement, self.bcs, self.counters = displacement, bcs, counters
         self.a, self.L = fem.form(a), fem.form(L)
         A = fem_petsc.assemble_matrix(self.a, bcs=bcs)
@@ -67,7 +69,9 @@ class Extension:
             ksp.getPC().setFactorSolverType(package)
             if package == "mumps":
                 ksp.setOptionsPrefix(prefix)
-                PETSc.Options()[f"{prefix}mat_mumps_icntl_7"] = 5     # METIS ordering
+                o = PETSc.Options()
+                for key, value in mumps_options(workspace_percent).items():
+                    o[f"{prefix}{key}"] = value
                 ksp.setFromOptions()
 
     def solve(self, t: float, guess: np.ndarray) -> None:

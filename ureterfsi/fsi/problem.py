@@ -27,8 +27,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics, sparsity
-from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
-                             direct_package)
+from .linear_solvers import (KRYLOV, MUMPS_WORKSPACE_PERCENT, BlockGaussSeidel, FlowBlockLU, LinearSolver,
+                             SchurFieldsplit, WholeSystemLU, direct_package)
 from .materials import LinearElastic, MooneyRivlin
 from .mesh_motion import Extension, PrescribedMap
 from .operators import Operators
@@ -64,6 +64,9 @@ class SolverOptions:
     # or "block_gauss_seidel": GMRES with a solid -> mesh -> flow block Gauss-Seidel preconditioner, MUMPS LU on
     # each block (coupled FSI scenes, monolithic mesh motion; ureterfsi.fsi.linear_solvers)
     linear_solver: str = "mumps"
+    # MUMPS ICNTL(14): workspace margin over MUMPS's estimate, per cent, of every MUMPS factorisation the
+    # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
+    mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
     # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
     # ICC(0) instead of LU (whose factor is as large as the flow's: 1.0 vs 1.1 GB on the coarse model 3);
     # None: always LU
@@ -448,12 +451,12 @@ class MonolithicFSI:
         if o.linear_solver == "block_gauss_seidel":
             return BlockGaussSeidel(self.ksp, prefix, self._split_is(self.coupled_splits()), o.krylov_rtol,
                                     o.krylov_max_iterations, o.krylov_refactorise_iterations, self.counters,
-                                    self.timings)
+                                    self.timings, workspace_percent=o.mumps_workspace_percent)
         if self.segregated:
             splits = self.field_is({"mirror": ["displacement"],
                                     "flow": [f for f in self.field_names if f != "displacement"]})
-            return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters)
-        return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters)
+            return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
+        return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
@@ -475,7 +478,8 @@ class MonolithicFSI:
         self.mesh_motion = Extension(d, self.mesh_bcs, a, L, self.comm,
                                      iterative=limit is not None and unknowns > limit,
                                      package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
-                                     prefix=f"{self.options_prefix}mesh_", counters=self.counters)
+                                     prefix=f"{self.options_prefix}mesh_", counters=self.counters,
+                                     workspace_percent=o.mumps_workspace_percent)
 
     @property
     def mesh_motion_solver(self) -> str:

@@ -30,7 +30,6 @@ import numpy as np
 import ufl
 from dolfinx import fem, geometry
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI,
                            NewtonDivergence, NewtonianFluid, Observer, OpenBoundary, Scene, SolidRegion, SolverOptions,
@@ -547,6 +546,11 @@ CASES = {"FSI2": FSI2(), "FSI3": FSI3()}
 MUMPS_WORKSPACE_PERCENT = 100
 
 
+def transient_options(**overrides) -> SolverOptions:
+    """The engine's options of run_transient: SolverOptions with MUMPS_WORKSPACE_PERCENT (and `overrides`)."""
+    return SolverOptions(**({"mumps_workspace_percent": MUMPS_WORKSPACE_PERCENT} | overrides))
+
+
 def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3, end: float = 10.0,
                   start: str = "rest", kick: tuple = (10.0, 0.05), comm=MPI.COMM_WORLD,
                   options: SolverOptions | None = None, max_halvings: int = 4, series_path=None,
@@ -557,7 +561,8 @@ def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3,
     start "steady": from the steady solution at full inflow (the unstable symmetric branch), with the flag
     pushed by kick_force(rho_s, *kick) (acceleration [m/s^2], duration [s]) so the oscillation starts at once.
     The periodic regime is the same; "steady" skips the ramp and the slow growth from round-off.
-    series_path: the time series is written there (JSON) every `save_every` steps while it runs."""
+    series_path: the time series is written there (JSON) every `save_every` steps while it runs.
+    options: the engine's options, transient_options() by default."""
     if start not in ("rest", "steady"):
         raise ValueError(f"run_transient start: 'rest' or 'steady', got {start!r}")
     params = CASES[case]
@@ -566,8 +571,7 @@ def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3,
     forces = [BodyForce([TAGS.flag], kick_force(params.rho_s, *kick))] if start == "steady" else []
     scene, inflow = make_scene(mesh, ct, ft, params, ramp_time=RAMP_TIME if start == "rest" else 0.0,
                                body_forces=forces)
-    problem = MonolithicFSI(scene, options or SolverOptions())
-    PETSc.Options()[f"{problem.ksp.getOptionsPrefix()}mat_mumps_icntl_14"] = MUMPS_WORKSPACE_PERCENT
+    problem = MonolithicFSI(scene, options or transient_options())
     if start == "steady":
         solve_steady_with_continuation(problem, inflow, amplitudes=(0.25, 0.5, 0.75, 1.0))
     series = TransientSeries(problem, path=series_path, save_every=save_every)
