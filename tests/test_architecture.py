@@ -212,8 +212,9 @@ def test_ureterfsi_has_no_import_time_cycle():
 
 
 # modules in a circle of function-level imports (issue 16): config validates stability cases and design
-# sections with their own modules. The set may only shrink.
-CIRCLED = {"ureterfsi.config", "ureterfsi.designs", "ureterfsi.stability.cases"}
+# sections with their own modules (the module ureterfsi.config became the package: its checks and its
+# validation hold those imports). The set may only shrink.
+CIRCLED = {"ureterfsi.config.checks", "ureterfsi.config.validation", "ureterfsi.designs", "ureterfsi.stability.cases"}
 
 
 def test_no_module_joins_an_import_circle():

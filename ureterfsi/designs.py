@@ -34,7 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config import ConfigError, _fmt, validate_config, wall_sections
+from .config.errors import ConfigError, fmt
+from .config.runs import wall_sections
+from .config.validation import validate_config
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
@@ -224,10 +226,10 @@ def _check_study(cfg: dict, name: str, spec: dict) -> None:
         raise ConfigError(key, f"the name is reserved for results/designs/{name}/; choose another")
     if spec["model"] not in cfg["models"]:
         raise ConfigError(f"{key}.model", f"must be one of models {sorted(cfg['models'], key=int)}, "
-                                          f"got {_fmt(spec['model'])}")
+                                          f"got {fmt(spec['model'])}")
     if spec["level"] not in cfg["mesh"]["levels"]:
         raise ConfigError(f"{key}.level", f"must be one of mesh.levels {list(cfg['mesh']['levels'])}, "
-                                          f"got {_fmt(spec['level'])}")
+                                          f"got {fmt(spec['level'])}")
     if ("grid" in spec) == ("sample" in spec):
         raise ConfigError(key, "needs exactly one of grid (values per parameter) or sample (bounds per parameter)")
     params = spec["grid"]["parameters"] if "grid" in spec else spec["sample"]["bounds"]
@@ -246,13 +248,13 @@ def _check_study(cfg: dict, name: str, spec: dict) -> None:
         for p, vals in params.items():
             rounded = [_round(v) for v in vals]
             if len(set(rounded)) != len(rounded):
-                raise ConfigError(_parameter_key(name, spec, p), f"values must be distinct, got {_fmt(list(vals))}")
+                raise ConfigError(_parameter_key(name, spec, p), f"values must be distinct, got {fmt(list(vals))}")
     else:
         s = spec["sample"]
         for p, (lo, hi) in params.items():
             if not lo < hi:
                 raise ConfigError(_parameter_key(name, spec, p), f"bounds must be [low, high] with low < high, "
-                                                                 f"got {_fmt([lo, hi])}")
+                                                                 f"got {fmt([lo, hi])}")
         if s["method"] == "sobol" and s["size"] & (s["size"] - 1):
             raise ConfigError(f"{key}.sample.size", f"a Sobol' sample keeps its balance only at a power of 2, "
                                                     f"got {s['size']}")
@@ -287,14 +289,14 @@ def _precheck(cfg: dict, model: str, values: dict) -> tuple[str, str] | None:
     if "stent_outer_diameter" in values:
         fr = outer / FRENCH
         if not FRENCH_RANGE[0] - 1e-9 <= fr <= FRENCH_RANGE[1] + 1e-9:
-            return "stent_outer_diameter", (f"{_fmt(outer)} m = {fr:.3g} Fr is outside the ureteral stent sizes "
+            return "stent_outer_diameter", (f"{fmt(outer)} m = {fr:.3g} Fr is outside the ureteral stent sizes "
                                             f"{FRENCH_RANGE[0]:g}-{FRENCH_RANGE[1]:g} Fr (1 Fr = 1/3 mm)")
         if not outer < lumen:
-            return "stent_outer_diameter", (f"{_fmt(outer)} m must be < the ureter lumen diameter {_fmt(lumen)} m "
+            return "stent_outer_diameter", (f"{fmt(outer)} m must be < the ureter lumen diameter {fmt(lumen)} m "
                                             f"(the stent would touch the wall)")
     if ("stent_outer_diameter" in values or "stent_wall_thickness" in values) and not 2 * t < outer:
         p = "stent_wall_thickness" if "stent_wall_thickness" in values else "stent_outer_diameter"
-        return p, f"wall thickness {_fmt(t)} m leaves no stent lumen in an outer diameter of {_fmt(outer)} m"
+        return p, f"wall thickness {fmt(t)} m leaves no stent lumen in an outer diameter of {fmt(outer)} m"
     return None
 
 
@@ -307,7 +309,7 @@ def _blame(values: dict, err: ConfigError) -> str:
 
 
 def _values_text(values: dict) -> str:
-    return ", ".join(f"{p} = {_fmt(v)}" + ("" if PARAMETERS[p].units == "1" else f" {PARAMETERS[p].units}")
+    return ", ".join(f"{p} = {fmt(v)}" + ("" if PARAMETERS[p].units == "1" else f" {PARAMETERS[p].units}")
                      for p, v in values.items())
 
 

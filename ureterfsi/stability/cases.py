@@ -7,7 +7,9 @@ import re
 from copy import deepcopy
 from dataclasses import dataclass
 
-from ..config import check_stability, deep_merge, schema_defaults
+from ..config.checks import check_stability
+from ..config.reading import deep_merge
+from ..config.schema import schema_defaults
 from ..metadata import cf_meta
 
 SYMMETRY = "axisymmetric"

@@ -1,0 +1,51 @@
+"""Validated study configuration (config/config.yaml).
+
+Two layers, both reported as one line ``config error: <dotted.key>: <constraint, with the value>``:
+
+1. JSON Schema (workflow/schemas/config.schema.yaml): keys, types, ranges, enums, no unknown keys.
+   Of several violations the first by dotted key path (sorted) is reported, so the message is
+   deterministic. Optional keys with a schema ``default`` are filled in place (as
+   ``snakemake.utils.validate(..., set_default=True)`` would), so every consumer sees the same keys.
+   An integer key is refused as a float even when integral (``15.0``): JSON Schema's ``integer`` accepts
+   15.0, but a float where a count is meant reaches the engine as a float.
+2. Physical/geometric consistency (``CHECKS``, run in order, first failure reported): plausible
+   magnitudes first (``ureterfsi.plausibility``: a value outside its range is most often a unit slip),
+   then the cross-key rules the schema cannot express. Each check is a small function naming the key it
+   blames; where a rule involves several keys the message quotes every value entering it.
+
+Files are read by ``read_yaml`` (PyYAML's safe loader, YAML 1.1 as Snakemake reads them), which also refuses
+what that loader lets through silently: a key given twice in one mapping, a decimal comma in a flow mapping
+(``{s: 0,005}`` reads as ``{s: 0, 5: null}``) or sequence, a leading-zero integer (``010`` is octal 8); a
+syntax error is reported as ``file:line:column``.
+
+    python -m ureterfsi.config check config/config.yaml [overlay.yaml ...]
+
+Modules by job: errors (ConfigError), reading (YAML files, --config values, deep_merge), schema (layer 1),
+plausible and checks (layer 2), validation (validate_config, load_config*), runs (run_sections, run_config,
+wall_sections, unmakeable), cli (the command line).
+"""
+from __future__ import annotations
+
+from .checks import (CHECKS, MIN_BULK_RATIO, MIN_ELEMENTS, MIN_GAP_ELEMENTS, MIN_GAP_HOLE_DIAMETERS, RTOL, START_WIDTHS,
+                     check_figures, check_fluid_bulk, check_fluid_gap, check_hole_end_clearance, check_hole_vs_stent,
+                     check_ladder, check_levels, check_mesh_sizes, check_model_keys, check_models, check_peristalsis,
+                     check_resolution, check_runs, check_stability, check_stent_offset, check_stricture, check_study,
+                     check_symmetry, check_time, check_ureter_material, check_ureter_wall)
+from .cli import main
+from .errors import ConfigError
+from .plausible import check_plausible
+from .reading import deep_merge, read_config_args, read_yaml
+from .runs import RUN_SECTIONS, WALL_GEOMETRY, read_run_config, run_config, run_sections, unmakeable, wall_sections
+from .schema import REPO_ROOT, SCHEMA_PATH, load_schema, schema_defaults
+from .validation import DEFAULT_CONFIG, load_config, load_config_files, validate_config
+
+__all__ = [
+    "CHECKS", "ConfigError", "DEFAULT_CONFIG", "MIN_BULK_RATIO", "MIN_ELEMENTS", "MIN_GAP_ELEMENTS",
+    "MIN_GAP_HOLE_DIAMETERS", "REPO_ROOT", "RTOL", "RUN_SECTIONS", "SCHEMA_PATH", "START_WIDTHS", "WALL_GEOMETRY",
+    "check_figures", "check_fluid_bulk", "check_fluid_gap", "check_hole_end_clearance", "check_hole_vs_stent",
+    "check_ladder", "check_levels", "check_mesh_sizes", "check_model_keys", "check_models", "check_peristalsis",
+    "check_plausible", "check_resolution", "check_runs", "check_stability", "check_stent_offset", "check_stricture",
+    "check_study", "check_symmetry", "check_time", "check_ureter_material", "check_ureter_wall", "deep_merge",
+    "load_config", "load_config_files", "load_schema", "main", "read_config_args", "read_run_config", "read_yaml",
+    "run_config", "run_sections", "schema_defaults", "unmakeable", "validate_config", "wall_sections",
+]

@@ -1,0 +1,78 @@
+"""Runs of a configuration: whether one can be made, the sections a solve reads (rule solve's file), the wall's."""
+from __future__ import annotations
+
+import json
+
+from .errors import ConfigError, fmt
+from .schema import schema_defaults
+
+
+def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
+    """Why the mesh of `model` at `level` in `symmetry` (and so every run on it) cannot be made, '' if it can: a
+    model of `models`, a level of `mesh.levels`, the axisymmetric (r-z) section only of a stent-free model, and no
+    quarter model of an offset stent (geometry.stent_offset breaks the x = 0 mirror plane)."""
+    models, levels = cfg["models"], cfg["mesh"]["levels"]
+    if model not in models:
+        return f"model {model!r} is not one of models {sorted(models, key=int)}"
+    if level not in levels:
+        return f"level {level!r} is not one of mesh.levels {list(levels)}"
+    if symmetry == "axisymmetric" and models[model]["stent"]:
+        free = [m for m in sorted(models, key=int) if not models[m]["stent"]]
+        return (f"model {model} has a stent: the axisymmetric (r-z) section is only for the stent-free models "
+                f"{free} (side holes break rotational symmetry)")
+    if symmetry == "quarter" and models[model]["stent"] and cfg["geometry"]["stent_offset"]:
+        return (f"geometry.stent_offset {fmt(cfg['geometry']['stent_offset'])} m breaks the x = 0 mirror plane: "
+                f"model {model} has no quarter model; use symmetry half (y >= 0)")
+    return ""
+
+
+# the geometry the r-z wall solve reads (ureterfsi.calibration.WallModel): the stent and its holes do not enter
+WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
+                 "stricture_position")
+
+
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")
+
+
+def run_sections(cfg: dict, model: str) -> dict:
+    """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
+    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
+    return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
+
+
+def run_config(sections: dict, model: str) -> dict:
+    """The configuration of one solve from what run_sections(cfg, model) returned (rule solve's config file):
+    those sections, `models` holding the run's model alone."""
+    want = set(RUN_SECTIONS) | {"model"}
+    if set(sections) != want:
+        raise ConfigError("<run config>", f"must hold exactly the sections {sorted(want)}, got {sorted(sections)}")
+    for name in RUN_SECTIONS:
+        missing = sorted(set(schema_defaults(name)) - set(sections[name]))
+        if missing:
+            raise ConfigError(f"<run config> {name}.{missing[0]}", "missing: the file was written by another version "
+                              "of ureterfsi (re-run rule solve_config)")
+    return {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+
+
+def read_run_config(path, model: str) -> dict:
+    """run_config of the JSON file rule solve_config wrote; ConfigError naming the file when it is not one."""
+    try:
+        with open(path) as fh:
+            sections = json.load(fh)
+    except (OSError, ValueError) as err:
+        raise ConfigError(f"<run config> {path}", f"unreadable ({err})") from None
+    if not isinstance(sections, dict):
+        raise ConfigError(f"<run config> {path}", "must be a JSON object of configuration sections")
+    try:
+        return run_config(sections, model)
+    except ConfigError as err:
+        raise ConfigError(f"<run config> {path}: {err.key.removeprefix('<run config>').strip()}",
+                          err.constraint) from None
+
+
+def wall_sections(cfg: dict) -> dict:
+    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
+    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
+    return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
+        k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
+        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}
