@@ -355,6 +355,7 @@ def check_stability(cfg):
     st = cfg.get("stability")
     if st is None:
         return
+    # lazy: stability.cases imports this module (a circle), and its package imports dolfinx
     from ureterfsi.stability.cases import Case
 
     levels, models = cfg["mesh"]["levels"], cfg["models"]

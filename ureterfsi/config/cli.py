@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import sys
 
+from ureterfsi.provenance import config_hash
+
 from .errors import ConfigError
 from .validation import load_config_files
 
@@ -12,8 +14,6 @@ def main(argv: list[str] | None = None) -> int:
     if len(argv) < 2 or argv[0] != "check":
         sys.stderr.write("usage: python -m ureterfsi.config check <config.yaml> [<overlay.yaml> ...]\n")
         return 2
-    from ureterfsi.provenance import config_hash
-
     try:
         cfg = load_config_files(argv[1:])
     except ConfigError as err:

@@ -8,6 +8,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import yaml
+from jsonschema import Draft202012Validator, validators
 
 from .errors import ConfigError, dotted, fmt
 
@@ -119,8 +120,6 @@ def _schema_message(err) -> tuple[str, str]:
 @lru_cache(maxsize=1)
 def _validator():
     """Draft 2020-12 validator of the schema whose ``integer`` excludes floats (JSON Schema accepts 15.0)."""
-    from jsonschema import Draft202012Validator, validators
-
     checker = Draft202012Validator.TYPE_CHECKER.redefine(
         "integer", lambda _, inst: isinstance(inst, int) and not isinstance(inst, bool))
     return validators.extend(Draft202012Validator, type_checker=checker)(load_schema())

@@ -23,7 +23,8 @@ def validate_config(cfg: dict) -> None:
     validate_schema(cfg)
     for check in CHECKS:
         check(cfg)
-    from ureterfsi.designs import check_design_studies  # each design point validated as a config of its own
+    # lazy: designs validates each design point with validate_config (a circle)
+    from ureterfsi.designs import check_design_studies
     check_design_studies(cfg)
 
 

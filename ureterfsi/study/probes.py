@@ -11,6 +11,8 @@ Every variable carries CF `units` and `long_name`; the dataset carries provenanc
 """
 from __future__ import annotations
 
+import resource
+
 import numpy as np
 import ufl
 import xarray as xr
@@ -255,8 +257,6 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
              "step_wall_time": [r.wall_time for r in records]}
     for name, values in steps.items():
         ds[name] = _cf(xr.DataArray(np.asarray(values), dims="step"), name)
-    import resource
-
     # peak resident memory of this process (Linux reports KiB), rank 0 under MPI
     peak = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
     ds.attrs.update(provenance_attrs(cfg, model=spec.model, mesh_level=spec.level, symmetry=spec.symmetry,
