@@ -164,16 +164,25 @@ def test_first_error_is_deterministic(cfg):
         validate_config(cfg)
 
 
-def test_axisymmetric_allowed_without_stents(cfg):
+def test_stent_free_study_refused_at_convergence_model(cfg):
+    """A study of stent-free models only (study-wide r-z) cannot draw Fig. 3 (the stent's stress): refused before
+    any solve, naming the key, not after the solves in the figure rule."""
+    stented = cfg["models"]["2"]
     cfg["models"] = {"1": cfg["models"]["1"]}
     cfg["mesh"]["symmetry"] = "axisymmetric"
     cfg["study"]["convergence_model"] = "1"
     cfg["ladder"]["model"] = "1"
     for rung in cfg["ladder"]["rungs"].values():
         rung["symmetry"] = "axisymmetric"
-    with pytest.raises(ConfigError, match=r"^config error: stability\.holes\.model: must be one of models \['1'\]"):
-        validate_config(copy.deepcopy(cfg))        # the side-hole cases need a stented model
     del cfg["stability"]["axes"]["hole_elements"]
+    with pytest.raises(ConfigError, match=r"^config error: study\.convergence_model: model '1' has no stent: "):
+        validate_config(copy.deepcopy(cfg))
+    cfg["models"]["2"] = stented
+    cfg["study"]["convergence_model"] = "2"
+    with pytest.raises(ConfigError, match=r"^config error: mesh\.symmetry: 'axisymmetric' is study-wide"):
+        validate_config(copy.deepcopy(cfg))    # the stented model needs a 3D section
+    cfg["mesh"]["symmetry"] = "quarter"
+    cfg["study"]["runs"] = {"1": {"symmetry": "axisymmetric", "fidelity": "fully_coupled"}}
     validate_config(cfg)
 
 

@@ -103,6 +103,8 @@ CATALOGUE = [
      "scenes.fig04_outlet_flow.quantities[0]", "got 'outlet_flow'"),
     ("model_name", 'study: {convergence_model: "three"}\n', "study.convergence_model",
      "must be one of models ['1', '2', '3', '4'], got 'three'"),
+    ("convergence_model_without_stent", 'study: {convergence_model: "1"}\n', "study.convergence_model",
+     "model '1' has no stent: the mesh-convergence study"),
     ("model_gap", 'models: {"6": {label: x, stent: true, hole_pair_spacing: 0.025, holes: 6}}\n', "models",
      'model keys must be "1".."5" without gaps'),
     ("level_name", "study: {level: ultra}\n", "study.level", "must be one of mesh.levels"),
@@ -377,6 +379,7 @@ SHIPPED = [
     ["config/config.yaml"],
     ["config/config.yaml", "config/quickstart.yaml"],
     ["config/config.yaml", "config/reference.yaml"],
+    ["config/config.yaml", "config/ladder-pulse.yaml"],
     ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml"],   # the SLURM profile
     ["config/config.yaml", "config/designs/hole_diameter_spacing.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/stricture.yaml"],

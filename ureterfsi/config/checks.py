@@ -296,6 +296,10 @@ def check_study(cfg):
     if st["convergence_model"] not in cfg["models"]:
         raise ConfigError("study.convergence_model", f"must be one of models {sorted(cfg['models'])}, "
                                                      f"got {fmt(st['convergence_model'])}")
+    if not cfg["models"][st["convergence_model"]]["stent"]:
+        raise ConfigError("study.convergence_model", f"model {st['convergence_model']!r} has no stent: the mesh-"
+                                                     f"convergence study (paper §3.1, Fig. 3) compares the stent's "
+                                                     f"von Mises stress along the probe line; name a stented model")
     if not any(abs(st["convergence_time"] - t) < 1e-12 for t in cfg["time"]["probe_times"]):
         raise ConfigError("study.convergence_time", f"must be one of time.probe_times "
                                                     f"{fmt(cfg['time']['probe_times'])}, got {fmt(st['convergence_time'])}")
