@@ -283,6 +283,25 @@ def test_strictured_design_point_end_to_end(tmp_path):
     assert float(ds["stricture_fraction"].values[0]) == 0.6
 
 
+@pytest.mark.parametrize("axisymmetric", [False, True])
+def test_algebraic_min_jacobian_of_a_uniform_dilation(axisymmetric):
+    """ureterfsi.study.oneway.algebraic_min_jacobian of d = c t x (3D: J = (1 + c t)^3) and of d = (c t r, 0) in r-z
+    (J = (1 + c t)^2, the axis vertices through the limit 1 + du_r/dr): the minimum over the times and its time."""
+    from dolfinx import mesh as dmesh
+    from mpi4py import MPI
+    from ureterfsi.study.oneway import algebraic_min_jacobian
+
+    c = -0.4
+    if axisymmetric:
+        msh = dmesh.create_unit_square(MPI.COMM_WORLD, 3, 3)
+        blend = lambda x, t: np.vstack([c * t * x[0], 0.0 * x[0]])     # noqa: E731
+    else:
+        msh = dmesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2)
+        blend = lambda x, t: c * t * x[:3]                              # noqa: E731
+    jmin, at = algebraic_min_jacobian(msh, blend, [0.0, 1.0, 0.5], axisymmetric)
+    assert at == 1.0 and jmin == pytest.approx((1 + c) ** (2 if axisymmetric else 3), rel=1e-12)
+
+
 def test_radial_blend_follows_the_strictured_wall():
     """The one-way ALE map moves a node on the narrowed wall R_i(z) with the wall and leaves the stent still."""
     from ureterfsi.geometry import UreterGeometry

@@ -333,6 +333,7 @@ def expand_study(cfg: dict, name: str) -> Study:
         if bad:
             raise ConfigError(_parameter_key(name, spec, bad[0]), f"point {pid} ({_values_text(values)}): {bad[1]}")
         pcfg = apply(cfg, model, values)
+        pcfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", pcfg["solver"]["one_way_mesh_motion"])
         try:
             validate_config(pcfg)
         except ConfigError as err:
@@ -442,6 +443,18 @@ def point_scalars(run) -> dict:
             "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run)
 
 
+def mesh_motion_variables(points, runs) -> dict:
+    """Per point (on the one-way rung): the ALE map its urine solve used (solver.one_way_mesh_motion, resolved under
+    auto), the algebraic map's predicted minimum Jacobian (auto; NaN otherwise) and the run's minimum Jacobian."""
+    def attr(p, key, default):
+        return runs[p.id].attrs.get(key, default)
+
+    return {"mesh_motion": (("design",), np.array([str(attr(p, "one_way_mesh_motion", "")) for p in points], dtype=object)),
+            "predicted_min_jacobian": (("design",), np.array([float(attr(p, "one_way_predicted_min_jacobian", np.nan))
+                                                              for p in points])),
+            "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
+
+
 def study_dataset(cfg: dict, name: str, paths: dict):
     """Dataset of a study from its run files {point id: path} (see the module docstring)."""
     import xarray as xr
@@ -480,6 +493,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
     vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
+    vars_ |= mesh_motion_variables(st.points, runs)
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
               "hole_axis": (("design", "hole"), hole_axis)}

@@ -66,6 +66,10 @@ VARIABLES = {
     "newton_iterations": ("1", "Newton iterations of the step"),
     "newton_residual": ("1", "final Newton residual norm of the step"),
     "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid mesh"),
+    "mesh_motion": ("1", "ALE map of the one-way urine solve: algebraic (radial blend) or extension (solver."
+                         "one_way_mesh_motion, chosen per design point under auto)"),
+    "predicted_min_jacobian": ("1", "minimum Jacobian of the algebraic ALE map over the recorded wall motion, "
+                                    "evaluated before the solve (one_way_mesh_motion auto)"),
     "step_wall_time": ("s", "wall-clock time of the step"),
     "model": ("1", "stent model number (paper Table 1)"),
     "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),
