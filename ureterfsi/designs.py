@@ -22,7 +22,8 @@ Results (``study_dataset``): the scalars of every point (peak and mean outlet fl
 through each side hole, the share of the outlet flow exchanged through the holes, the share of the outlet flow
 inside the stent lumen, peak stent von Mises stress, peak wall displacement, the pressure drop p_in - p_out between
 the end faces: its peak |.| and its mean) and the time series behind them, on one dimension per parameter for a full
-factorial grid, else on a ``design`` dimension with the parameters as coordinates.
+factorial grid, else on a ``design`` dimension with the parameters as coordinates; per point the one-way mesh motion
+it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.study.oneway.fluid_problem).
 """
 from __future__ import annotations
 
