@@ -47,6 +47,8 @@ class _SyntheticProbes:
                        "inlet_flux": list(FLUX_AMPLITUDE * np.cos(t)),
                        "outlet_mean_axial_velocity": list(1e-3 * np.sin(2 * np.pi * t / 3) * (1 + 0.05 * k)),
                        "fluid_volume": list(np.full_like(t, 3e-6)),
+                       "outlet_mean_pressure": list(130.0 + 5.0 * np.sin(t)),
+                       "inlet_mean_pressure": list(130.0 + 5.0 * np.cos(t)),
                        "max_wall_displacement": list(1e-3 * np.ones_like(t))}
         self.snapshot_times = [pt for pt in cfg["time"]["probe_times"] if pt <= t[-1] + 1e-9]
         wall = [1e-3 * np.exp(-0.5 * ((self.z - (cfg["peristalsis"]["speed"] * pt)) / 4.25e-3) ** 2)

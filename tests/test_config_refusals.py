@@ -383,6 +383,7 @@ SHIPPED = [
     ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml"],   # the SLURM profile
     ["config/config.yaml", "config/designs/hole_diameter_spacing.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/stricture.yaml"],
+    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/thin_gap.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/arrangement_offset.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/ladder-mini.yaml",

@@ -148,3 +148,29 @@ def test_flux_of_poiseuille_profile_through_a_disk(cylinder, dilation):
     one = assemble_scalar(fem.form((1.0 - ufl.SpatialCoordinate(msh)[0] ** 2 - ufl.SpatialCoordinate(msh)[1] ** 2)
                                    * ds(TOP)), COMM)
     assert flux == pytest.approx(scale * one, rel=1e-10)
+
+
+@pytest.mark.parametrize("c", [0.0, 150.0])
+def test_end_face_pressure_mean_of_a_prescribed_field(c):
+    """ureterfsi.probes.end_face_pressure_forms on the r-z tube of the engine tests: p = a + b z + e r (P1, exact)
+    with the ALE displacement u_r = c r^2 (c = 0: reference faces). The current-area mean on the face z = z_f is
+    a + b z_f + e int r r'(r) r''(r) dr / int r'(r) r''(r) dr, r' = r + c r^2 (the current radius), r'' = dr'/dr."""
+    from _engine_cases import INLET, LENGTH, OUTLET, R_I, tube_problem
+    from ureterfsi.probes import end_face_pressure_forms
+
+    pb, _ = tube_problem()
+    a, b, e = 130.0, -2.5e3, 4.0e4                     # Pa, Pa/m, Pa/m
+    for name, expr in (("pressure", lambda x: a + b * x[1] + e * x[0]),
+                       ("displacement", lambda x: np.vstack([c * x[0] ** 2, 0.0 * x[0]]))):
+        V, dofs = pb.W.sub(pb.index[name]).collapse()
+        f = fem.Function(V)
+        f.interpolate(expr)
+        pb.x.x.array[dofs] = f.x.array
+    val = {k: assemble_scalar(fem.form(f), COMM) for k, f in end_face_pressure_forms(pb, INLET, OUTLET).items()}
+    weight = np.polynomial.Polynomial([0.0, 1.0, c]) * np.polynomial.Polynomial([1.0, 2.0 * c])   # r' dr'/dr
+    r = np.polynomial.Polynomial([0.0, 1.0])
+    r_mean = (r * weight).integ()(R_I) / weight.integ()(R_I)
+    for end, z in (("inlet", 0.0), ("outlet", LENGTH)):
+        assert val[f"{end}_area"] == pytest.approx(math.pi * (R_I + c * R_I**2) ** 2, rel=1e-12)
+        assert val[f"{end}_pressure_integral"] / val[f"{end}_area"] == pytest.approx(a + b * z + e * r_mean,
+                                                                                      rel=1e-12)

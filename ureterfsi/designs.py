@@ -20,8 +20,10 @@ mirror planes hold (aligned or rotated hole pairs), the half model y >= 0 for a 
 
 Results (``study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
 through each side hole, the share of the outlet flow exchanged through the holes, the share of the outlet flow
-inside the stent lumen, peak stent von Mises stress, peak wall displacement) and the time series behind them, on one dimension per parameter for a full
-factorial grid, else on a ``design`` dimension with the parameters as coordinates.
+inside the stent lumen, peak stent von Mises stress, peak wall displacement, the pressure drop p_in - p_out between
+the end faces: its peak |.| and its mean) and the time series behind them, on one dimension per parameter for a full
+factorial grid, else on a ``design`` dimension with the parameters as coordinates; per point the one-way mesh motion
+it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.study.oneway.fluid_problem).
 """
 from __future__ import annotations
 
@@ -334,6 +336,7 @@ def expand_study(cfg: dict, name: str) -> Study:
         if bad:
             raise ConfigError(_parameter_key(name, spec, bad[0]), f"point {pid} ({_values_text(values)}): {bad[1]}")
         pcfg = apply(cfg, model, values)
+        pcfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", pcfg["solver"]["one_way_mesh_motion"])
         try:
             validate_config(pcfg)
         except ConfigError as err:
@@ -384,8 +387,9 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 # ------------------------------------------------------------------------------------------ dataset
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
-           "wall_time")
-SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement")
+           "wall_time", "peak_pressure_drop", "mean_pressure_drop")
+SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement",
+          "pressure_drop")
 
 
 def _trapz(y: np.ndarray, t: np.ndarray) -> float:
@@ -402,6 +406,20 @@ def hole_mirror_weights(run) -> np.ndarray:
     recorded = {(round(float(a), 9), int(b), float(c)) for a, b, c in zip(z, axis, side)}
     return np.array([1.0 if (round(float(a), 9), int(b), -float(c)) in recorded else 2.0
                      for a, b, c in zip(z, axis, side)])
+
+
+def pressure_drop(run) -> np.ndarray:
+    """p_in - p_out of a run dataset: inlet minus outlet area-mean end-face pressure (Pa; NaN where not recorded)."""
+    if "inlet_mean_pressure" not in run:
+        return np.full(run.sizes["time"], np.nan)
+    return run["inlet_mean_pressure"].values.astype(float) - run["outlet_mean_pressure"].values.astype(float)
+
+
+def pressure_drop_scalars(run) -> dict:
+    """Peak |p_in - p_out| (the pulse drives the urine both ways, so a signed mean partly cancels) and its
+    signed time mean (the net drop)."""
+    t, dp = run["time"].values.astype(float), pressure_drop(run)
+    return {"peak_pressure_drop": float(np.max(np.abs(dp))), "mean_pressure_drop": _trapz(dp, t) / (t[-1] - t[0])}
 
 
 def point_scalars(run) -> dict:
@@ -425,7 +443,19 @@ def point_scalars(run) -> dict:
             "stent_lumen_fraction": lumen_fraction,
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
-            "wall_time": float(run.attrs.get("wall_time_s", np.nan))}
+            "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run)
+
+
+def mesh_motion_variables(points, runs) -> dict:
+    """Per point (on the one-way rung): the ALE map its urine solve used (solver.one_way_mesh_motion, resolved under
+    auto), the algebraic map's predicted minimum Jacobian (auto; NaN otherwise) and the run's minimum Jacobian."""
+    def attr(p, key, default):
+        return runs[p.id].attrs.get(key, default)
+
+    return {"mesh_motion": (("design",), np.array([str(attr(p, "one_way_mesh_motion", "")) for p in points], dtype=object)),
+            "predicted_min_jacobian": (("design",), np.array([float(attr(p, "one_way_predicted_min_jacobian", np.nan))
+                                                              for p in points])),
+            "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 
 def study_dataset(cfg: dict, name: str, paths: dict):
@@ -454,8 +484,9 @@ def study_dataset(cfg: dict, name: str, paths: dict):
             data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
         rt = r["time"].values.astype(float)
         for k in SERIES:
-            if k in r:
-                series[k][i] = np.interp(t, rt, r[k].values, left=np.nan, right=np.nan)
+            if k in r or k == "pressure_drop":
+                v = pressure_drop(r) if k == "pressure_drop" else r[k].values
+                series[k][i] = np.interp(t, rt, v, left=np.nan, right=np.nan)
         for j in range(r.sizes.get("hole", 0)):
             hole_series[i, :, j] = np.interp(t, rt, r["hole_flux"].values[:, j], left=np.nan, right=np.nan)
             hole_z[i, j] = float(r["hole_z"].values[j])
@@ -465,6 +496,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
     vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
+    vars_ |= mesh_motion_variables(st.points, runs)
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
               "hole_axis": (("design", "hole"), hole_axis)}

@@ -29,6 +29,11 @@ VARIABLES = {
     "time": ("s since 2000-01-01 00:00:00", "simulated time from the start of the run (the epoch is t = 0)"),
     "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
     "inlet_flux": ("m3 s-1", "volumetric flow rate through the inlet (kidney side), positive into the ureter"),
+    "outlet_mean_pressure": ("Pa", "area-mean urine pressure on the outlet end face (current area)"),
+    "inlet_mean_pressure": ("Pa", "area-mean urine pressure on the inlet end face (current area)"),
+    "pressure_drop": ("Pa", "pressure drop along the segment, inlet minus outlet area-mean end-face pressure"),
+    "peak_pressure_drop": ("Pa", "maximum over the run of |inlet minus outlet area-mean end-face pressure|"),
+    "mean_pressure_drop": ("Pa", "time mean over the run of the inlet minus outlet area-mean end-face pressure"),
     "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
     "fluid_volume": ("m3", "volume of the urine domain"),
     "max_wall_displacement": ("m", "maximum radial displacement of the ureter outer wall along the probe line"),
@@ -61,6 +66,10 @@ VARIABLES = {
     "newton_iterations": ("1", "Newton iterations of the step"),
     "newton_residual": ("1", "final Newton residual norm of the step"),
     "min_ale_jacobian": ("1", "minimum Jacobian of the ALE map over the fluid mesh"),
+    "mesh_motion": ("1", "ALE map of the one-way urine solve: algebraic (radial blend) or extension (solver."
+                         "one_way_mesh_motion, chosen per design point under auto)"),
+    "predicted_min_jacobian": ("1", "minimum Jacobian of the algebraic ALE map over the recorded wall motion, "
+                                    "evaluated before the solve (one_way_mesh_motion auto)"),
     "step_wall_time": ("s", "wall-clock time of the step"),
     "model": ("1", "stent model number (paper Table 1)"),
     "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),

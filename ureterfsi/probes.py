@@ -120,3 +120,16 @@ def flux_volume_forms(pb) -> dict:
     return {"outlet_flux": ufl.dot(rel, n_da) * ops.weight * pb.ds(OUTLET),
             "inlet_flux": -ufl.dot(rel, n_da) * ops.weight * pb.ds(INLET),
             "fluid_volume": J * ops.weight * pb.dx(tuple(pb.fluid_tags))}
+
+
+def end_face_pressure_forms(pb, inlet: int = INLET, outlet: int = OUTLET) -> dict:
+    """UFL forms of the area-mean urine pressure on the open ends (facet tags `inlet`, `outlet`),
+    p_face = int p |J F^-T N| dA / int |J F^-T N| dA (current area, ALE): "{inlet,outlet}_pressure_integral" and
+    "{inlet,outlet}_area" (their ratio is the mean)."""
+    ops = pb.ops
+    p, u = pb.split()["pressure"], pb.split()["displacement"]
+    F = physics.deformation_gradient(ops, u)
+    n_da = ufl.det(F) * ufl.inv(F).T * ops.normal()
+    da = ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight
+    return {f"{end}_{k}": (p * da if k == "pressure_integral" else da) * pb.ds(tag)
+            for end, tag in (("inlet", inlet), ("outlet", outlet)) for k in ("pressure_integral", "area")}

@@ -106,7 +106,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
         cells = mesh.topology.index_map(mesh.topology.dim).size_global
         if holes:
             history = wall_history(ccfg, params["end_time"], setup["dt"])
-            pb, _ = fluid_problem(ccfg, mesh, ct, ft, history, axisymmetric=False)
+            pb, _, _ = fluid_problem(ccfg, mesh, ct, ft, history, axisymmetric=False)
         else:
             pb = MonolithicFSI(ureter_scene(ccfg, mesh, ct, ft, axisymmetric=True,
                                             peristalsis=ccfg["peristalsis"]), solver_options(ccfg))

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import time as _time
 from dataclasses import dataclass
 from functools import partial
@@ -258,22 +259,68 @@ def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: boo
     return field
 
 
+@dataclass
+class MeshMotionChoice:
+    """The one-way urine solve's ALE map: `used` (algebraic | extension) by `rule` (solver.one_way_mesh_motion);
+    under "auto" the algebraic map's minimum Jacobian over the recorded wall motion, `predicted_min_jacobian` at
+    `predicted_time` (NaN otherwise), decides against solver.one_way_auto_min_jacobian."""
+    rule: str
+    used: str
+    predicted_min_jacobian: float = math.nan
+    predicted_time: float = math.nan
+
+
+def algebraic_min_jacobian(mesh, blend, times, axisymmetric: bool, degree: int = 2) -> tuple[float, float]:
+    """(min over `times` of det(I + Grad d), the time of it) of the algebraic map d = blend(x, t) interpolated in
+    P`degree` on `mesh` (the fluid submesh), at the vertices of every cell (DG1, as the solver's inversion guard;
+    on the r-z axis the hoop stretch takes its limit 1 + du_r/dr)."""
+    ops = Operators(mesh, axisymmetric)
+    d = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", degree)))
+    J = ufl.det(physics.deformation_gradient(ops, d))
+    if axisymmetric:
+        F, g = physics.deformation_gradient(ops, d), ufl.grad(d)
+        J = ufl.conditional(ufl.gt(abs(ops.r), 1e-300), J, ufl.det(ufl.as_tensor(
+            [[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])))
+    Q = fem.FunctionSpace(mesh, ("DG", 1))
+    jac, expr = fem.Function(Q), fem.Expression(J, Q.element.interpolation_points())
+    n_local = Q.dofmap.index_map.size_local
+    best = (math.inf, math.nan)
+    for t in times:
+        d.interpolate(lambda x: blend(x, float(t)))
+        jac.interpolate(expr)
+        local = float(jac.x.array[:n_local].min(initial=math.inf))
+        best = min(best, (mesh.comm.allreduce(local, MPI.MIN), float(t)))
+    return best
+
+
 def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
-    """(problem, fluid submesh): the urine alone on the fluid part of the mesh, ALE, the recorded
-    inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung): the
-    radial blend (`solver.one_way_mesh_motion: algebraic`) or the extension problem (`extension`)."""
+    """(problem, fluid submesh, MeshMotionChoice): the urine alone on the fluid part of the mesh, ALE, the recorded
+    inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung): the radial
+    blend (`solver.one_way_mesh_motion: algebraic`), the extension problem (`extension`), or (`auto`) the blend
+    unless its minimum Jacobian over the recorded wall motion falls below `solver.one_way_auto_min_jacobian`."""
     fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
     u_wall, v_wall = inner_wall_motion(history, axisymmetric)
-    blend = None
-    if cfg["solver"]["one_way_mesh_motion"] == "algebraic":
+    blend, rule = None, cfg["solver"]["one_way_mesh_motion"]
+    choice = MeshMotionChoice(rule, "extension" if rule == "extension" else "algebraic")
+    if rule in ("algebraic", "auto"):
         g = UreterGeometry.from_config(cfg)
         has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
         blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius,
                              axisymmetric, g.stent_offset if has_stent else 0.0)
+    if rule == "auto":
+        t0 = _time.perf_counter()
+        jmin, at = algebraic_min_jacobian(fluid.mesh, blend, history.time, axisymmetric,
+                                          solver_options(cfg).velocity_degree)
+        limit = cfg["solver"]["one_way_auto_min_jacobian"]
+        choice = MeshMotionChoice(rule, "algebraic" if jmin >= limit else "extension", jmin, at)
+        log.info("mesh motion auto: the algebraic map's minimum Jacobian %.4f (t = %g s) %s %g -> %s (%.1f s)",
+                 jmin, at, ">=" if jmin >= limit else "<", limit, choice.used, _time.perf_counter() - t0)
+        if choice.used == "extension":
+            blend = None
     scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
                                mesh_motion=blend)
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
-    return MonolithicFSI(scene, options), fluid
+    return MonolithicFSI(scene, options), fluid, choice
 
 
 # ------------------------------------------------------------------------------------------------
@@ -381,7 +428,7 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
         history = wall_history(cfg, settings.end, settings.dt)
 
     axisymmetric = spec.symmetry == "axisymmetric"
-    pb, fluid = fluid_problem(cfg, mesh, cell_tags, facet_tags, history, axisymmetric)
+    pb, fluid, motion = fluid_problem(cfg, mesh, cell_tags, facet_tags, history, axisymmetric)
 
     g = UreterGeometry.from_config(cfg)
     model = StentModel.from_config(cfg, spec.model)
@@ -400,7 +447,10 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
             # the wall's solve time, in this run or in the shared wall_motion job (wall_motion_file)
             "wall_solve_time_s": round(history.wall_time, 2),
             "wall_motion_file": str(wall_path or ""),
-            "one_way_mesh_motion": cfg["solver"]["one_way_mesh_motion"],
+            "one_way_mesh_motion": motion.used,
+            "one_way_mesh_motion_rule": motion.rule,
+            "one_way_predicted_min_jacobian": motion.predicted_min_jacobian,
+            "one_way_predicted_min_jacobian_time": motion.predicted_time,
             "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
             "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
             "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],

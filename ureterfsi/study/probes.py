@@ -1,7 +1,8 @@
 """The study's probes of a ureter run and its probe dataset (netCDF).
 
 Probes (paper §3, Figs. 3-10, and beyond):
-  every step   outlet/inlet volumetric flux, mean axial outlet velocity (the paper's measure), maximum
+  every step   outlet/inlet volumetric flux, area-mean urine pressure on the outlet/inlet end faces, mean
+               axial outlet velocity (the paper's measure), maximum
                von Mises stress over the stent and where it occurs, fluid volume, flux through every
                side hole, maximum wall displacement, Newton iterations;
   probe times  von Mises along the probe line (r = 0.75 mm from the stent axis, plane y = 0, away from the
@@ -27,7 +28,8 @@ from ..fsi import physics
 from ..fsi.problem import MonolithicFSI
 from ..geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
 from ..metadata import cf_meta
-from ..probes import CellField, PointProbe, assemble_scalar, flux_volume_forms, inside_radius, von_mises
+from ..probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
+                      inside_radius, von_mises)
 from ..provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre
 from .options import RunSpec
@@ -92,7 +94,7 @@ class UreterProbes(Observer):
         e_z = ufl.as_vector([0.0, 0.0, 1.0])
         rel = ops.vec(v) - ops.vec(w)
         ds, dx = pb.ds, pb.dx
-        self.forms = {k: fem.form(f) for k, f in flux_volume_forms(pb).items()} | {
+        self.forms = {k: fem.form(f) for k, f in (flux_volume_forms(pb) | end_face_pressure_forms(pb)).items()} | {
             "outlet_area": fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight * ds(tags.OUTLET)),
             "outlet_axial_velocity_integral": fem.form(ufl.dot(ops.vec(v), e_z) * ufl.sqrt(ufl.dot(n_da, n_da))
                                                        * ops.weight * ds(tags.OUTLET)),
@@ -156,8 +158,8 @@ class UreterProbes(Observer):
         self.snapshot_times = []
 
     def series_names(self):
-        names = ["time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume",
-                 "max_wall_displacement"]
+        names = ["time", "outlet_flux", "inlet_flux", "outlet_mean_pressure", "inlet_mean_pressure",
+                 "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement"]
         if self.has_stent:
             names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
                       "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux"]
@@ -175,6 +177,8 @@ class UreterProbes(Observer):
         s["time"].append(pb.time)
         s["outlet_flux"].append(self.fraction * val["outlet_flux"])
         s["inlet_flux"].append(self.fraction * val["inlet_flux"])
+        for end in ("outlet", "inlet"):
+            s[f"{end}_mean_pressure"].append(val[f"{end}_pressure_integral"] / val[f"{end}_area"])
         s["outlet_mean_axial_velocity"].append(val["outlet_axial_velocity_integral"] / val["outlet_area"])
         s["fluid_volume"].append(self.fraction * val["fluid_volume"])
         wall = self.wall.radial_displacement(pb.time)
