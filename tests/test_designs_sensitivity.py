@@ -188,3 +188,14 @@ def test_map_figure_plots_the_grid_values():
         assert ax.collections[0].colorbar.ax.get_ylabel() == f"{q.replace('_', ' ')} [{VARIABLES[q][0]}]"
     with pytest.raises(ValueError, match="two grid parameters"):
         map_figure(ds.isel(stricture_fraction=[0], hole_pair_spacing=[0]))
+
+
+def test_dry_run_of_a_saltelli_study(tmp_path):
+    """D = 2, N = 4: 24 rows, 16 distinct points, each one solve on its own wall motion; the Sobol' figure."""
+    from test_designs import _dry
+
+    cfg = copy.deepcopy(BASE)
+    cfg["design_studies"] = {"s": saltelli(size=4)}
+    counts = _dry(tmp_path, cfg, "design_s")
+    assert counts == {"design_solve": 16, "design_mesh": 1, "design_wall_motion": 16, "design_dataset": 1,
+                      "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts
