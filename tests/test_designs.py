@@ -174,11 +174,19 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
         assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
+    from ureterfsi.designs import QUANTITIES
     from ureterfsi.plotting_designs import map_figure
 
-    first = map_figure(ds).axes[0]          # peak outlet flux over hole diameter (x) and peak traction (y)
-    assert np.ma.allequal(first.collections[0].get_array(),
-                          ds["peak_outlet_flux"].transpose("peak_traction", "hole_diameter").values)
+    drawn = [q for q in QUANTITIES if np.isfinite(ds[q].values).any()]
+    maps = map_figure(ds).axes[:len(drawn)]     # one map per quantity over hole diameter (x) and peak traction (y)
+    for q, ax in zip(drawn, maps):
+        assert np.ma.allequal(ax.collections[0].get_array(), ds[q].transpose("peak_traction", "hole_diameter").values), q
+    assert "backflow_volume" in drawn and np.ptp(ds["backflow_volume"].values) > 0
+    report = tmp_path / "report.html"
+    ok(snakemake(tmp_path, path, "--report", str(report), "design_mini"))
+    html = report.read_text(errors="replace")
+    assert "mini_map.png" in html and "mini_parameters.png" in html and "snakemake.wildcards" not in html
+    assert "Design map of study mini" in html
     for p in ds["point_id"].values.ravel():
         assert (tmp_path / f"results/logs/designs/mini/{p}.log").stat().st_size > 0
         assert (tmp_path / f"results/benchmarks/designs/mini/{p}.tsv").exists()

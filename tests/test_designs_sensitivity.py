@@ -134,10 +134,15 @@ def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):
     assert np.isnan(ds["sobol_total"].sel(quantity="peak_stent_von_mises").values).all()   # no stent stress recorded
     for k in ("saltelli_point", "quantity", "parameter", *SOBOL_INDICES):
         assert (ds[k].attrs["units"], ds[k].attrs["long_name"]) == VARIABLES[k], k
+    from ureterfsi.metadata import write_netcdf
     from ureterfsi.plotting_designs import sensitivity_figure
 
-    fig = sensitivity_figure(ds)
-    assert fig.axes[0].get_xlabel() == "Sobol' index"
+    write_netcdf(ds, tmp_path / "s.nc")                  # what rule design_sensitivity reads
+    back = xr.load_dataset(tmp_path / "s.nc", decode_times=False)
+    assert list(back["parameter"].values) == list(BOUNDS) and (back["saltelli_point"] == ds["saltelli_point"]).all()
+    assert np.allclose(back["sobol_total"].values, ds["sobol_total"].values, equal_nan=True)
+    fig = sensitivity_figure(back)
+    assert fig.axes[0].get_xlabel() == "Sobol' index" and fig.axes[0].get_title() == "peak outlet flux"
 
 
 def test_sobol_figure_draws_the_indices_and_their_intervals():
@@ -177,7 +182,7 @@ def test_map_figure_plots_the_grid_values():
     assert len(maps) == 4
     for n, ax in enumerate(maps):
         q, col = list(data)[n // 2], n % 2
-        expected = np.ma.masked_invalid(data[q][:, :, col, 0].T)          # rows: stricture_fraction, columns: hole_diameter
+        expected = np.ma.masked_invalid(data[q][:, :, col, 0].T)      # rows: stricture fraction, columns: hole diameter
         got = ax.collections[0].get_array()
         assert got.shape == expected.shape and np.ma.allequal(got, expected), (q, col)
         assert (np.ma.getmaskarray(got) == np.ma.getmaskarray(expected)).all()

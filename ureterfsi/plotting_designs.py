@@ -90,8 +90,8 @@ def sobol_figure(ds: xr.Dataset):
     confidence intervals (ureterfsi.designs.sobol_indices)."""
     params = [str(p) for p in ds["parameter"].values]
     quantities = [str(q) for q in ds["quantity"].values if np.isfinite(ds["sobol_total"].sel(quantity=q).values).any()]
-    fig, axes = plt.subplots(1, max(len(quantities), 1), figsize=(2.6 * max(len(quantities), 1) + 1.2, 0.5 * len(params) + 1.8),
-                             squeeze=False, sharey=True)
+    n = max(len(quantities), 1)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n + 1.2, 0.5 * len(params) + 1.8), squeeze=False, sharey=True)
     pos = np.arange(len(params))
     for ax, q in zip(axes[0], quantities):
         for k, (name, label, shift) in enumerate((("sobol_first_order", "S1", -0.2), ("sobol_total", "ST", 0.2))):

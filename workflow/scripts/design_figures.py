@@ -8,6 +8,7 @@ from ureterfsi.plotting_designs import map_figure, parameters_figure, sensitivit
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO)  # noqa: F821
 ds = xr.load_dataset(snakemake.input[0], decode_times=False)  # noqa: F821
-draw = {"design_map": map_figure, "design_sensitivity": sensitivity_figure}.get(snakemake.rule, parameters_figure)  # noqa: F821
+DRAW = {"design_figures": parameters_figure, "design_map": map_figure, "design_sensitivity": sensitivity_figure}
+draw = DRAW[snakemake.rule]  # noqa: F821
 save_figure(draw(ds), list(snakemake.output), dpi=snakemake.params.dpi)  # noqa: F821
 logging.info("%s -> %s", snakemake.rule, list(snakemake.output))  # noqa: F821
