@@ -67,8 +67,9 @@ def stability_case(name: str, axis: str, steps: int) -> xr.Dataset:
     return ds
 
 
-def design_study(cfg, tmp_path) -> xr.Dataset:
-    """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3."""
+def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
+    """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3 (or of a Saltelli
+    design of N = 2 over two parameters: 12 rows, 8 points, with its Sobol' indices)."""
     from test_aggregate_figures import synthetic_run
     from ureterfsi import designs
     from ureterfsi.config import load_config
@@ -76,6 +77,9 @@ def design_study(cfg, tmp_path) -> xr.Dataset:
     grid = {"model": "3", "level": "coarse",
             "grid": {"mode": "full_factorial", "parameters": {"hole_diameter": [5e-4, 7e-4],
                                                                "hole_pair_spacing": [0.005, 0.01]}}}
+    if saltelli:
+        grid = {"model": "3", "level": "coarse", "sample": {"method": "saltelli", "size": 2, "seed": 0, "bounds": {
+            "hole_diameter": [5e-4, 7e-4], "peak_traction": [4e4, 6e4]}}}
     cfg = load_config(cfg, {"design_studies": {"s": grid}})
     paths = {}
     for p in designs.studies(cfg)["s"].points:
@@ -85,7 +89,7 @@ def design_study(cfg, tmp_path) -> xr.Dataset:
 
 
 KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",
-         "design_study")
+         "design_study", "saltelli_study")
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -130,7 +134,8 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
 
         ds = S.combine([stability_case("baseline", "none", 4), stability_case("time_step_0.1", "time_step", 3)])
     else:
-        ds = design_study(cfg, tmp_path)
+        ds = design_study(cfg, tmp_path, saltelli=kind == "saltelli_study")
+        assert kind == "design_study" or ds.sizes["saltelli_row"] == 12 and "sobol_total" in ds
     path = tmp_path / f"{kind}.nc"
     metadata.write_netcdf(ds, path)
     errors, warnings = cf_errors(path)

@@ -109,7 +109,7 @@ def test_dry_run_of_a_100_point_study(tmp_path):
                                          wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
     counts = _dry(tmp_path, cfg, "design_big")
     assert counts == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10, "design_dataset": 1,
-                      "design_figures": 1, "design_big": 1}, counts
+                      "design_figures": 1, "design_map": 1, "design_big": 1}, counts
 
 
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
@@ -153,7 +153,7 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=600)))
     assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_dataset": 1,
-                      "design_figures": 1, "design_mini": 1}, counts
+                      "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
     with xr.open_dataset(tmp_path / "results/designs/mini.nc", decode_times=False) as ds:
         ds.load()
     print("\n2x2 design study:", {q: ds[q].values.round(12).tolist() for q in (
@@ -173,6 +173,20 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     assert (disp[:, 1] > disp[:, 0]).all(), disp
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
+        assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
+    from ureterfsi.designs import QUANTITIES
+    from ureterfsi.plotting_designs import map_figure
+
+    drawn = [q for q in QUANTITIES if np.isfinite(ds[q].values).any()]
+    maps = map_figure(ds).axes[:len(drawn)]     # one map per quantity over hole diameter (x) and peak traction (y)
+    for q, ax in zip(drawn, maps):
+        assert np.ma.allequal(ax.collections[0].get_array(), ds[q].transpose("peak_traction", "hole_diameter").values), q
+    assert "backflow_volume" in drawn and np.ptp(ds["backflow_volume"].values) > 0
+    report = tmp_path / "report.html"
+    ok(snakemake(tmp_path, path, "--report", str(report), "design_mini"))
+    html = report.read_text(errors="replace")
+    assert "mini_map.png" in html and "mini_parameters.png" in html and "snakemake.wildcards" not in html
+    assert "Design map of study mini" in html
     for p in ds["point_id"].values.ravel():
         assert (tmp_path / f"results/logs/designs/mini/{p}.log").stat().st_size > 0
         assert (tmp_path / f"results/benchmarks/designs/mini/{p}.tsv").exists()

@@ -3,7 +3,8 @@ parameters, each design point a configuration of its own with its own chain of j
 
 A study is a grid (``full_factorial``: every combination; ``one_at_a_time``: the base point and each value of
 one parameter with the others at the base) or a sample (``sobol`` or ``latin_hypercube`` of
-``scipy.stats.qmc``, seeded, scaled to the bounds). A point is named by a stable id, the first 10 hex digits
+``scipy.stats.qmc``, or ``saltelli``: SALib's Saltelli design of N (2 D + 2) rows for Sobol' indices; seeded,
+scaled to the bounds). A point is named by a stable id, the first 10 hex digits
 of the SHA-256 of its parameter values; its configuration is the base configuration with the point's
 overrides (``PARAMETERS``), validated by ``ureterfsi.config.validate_config`` like any configuration, so an
 impossible design is refused before any job starts, in one line naming the parameter.
@@ -23,7 +24,10 @@ through each side hole, the share of the outlet flow exchanged through the holes
 inside the stent lumen, peak stent von Mises stress, peak wall displacement, the pressure drop p_in - p_out between
 the end faces: its peak |.| and its mean) and the time series behind them, on one dimension per parameter for a full
 factorial grid, else on a ``design`` dimension with the parameters as coordinates; per point the one-way mesh motion
-it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.study.oneway.fluid_problem).
+it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.study.oneway.fluid_problem). A
+Saltelli design adds the point of each sample row (``saltelli_point``: rows repeat, e.g. B_A1 = A_B2 for D = 2, and
+each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
+(``sobol_indices``, SALib.analyze.sobol).
 """
 from __future__ import annotations
 
@@ -110,11 +114,12 @@ class Study:
     model: str
     level: str
     rung: str
-    kind: str                          # full_factorial | one_at_a_time | sobol | latin_hypercube
+    kind: str                          # full_factorial | one_at_a_time | sobol | latin_hypercube | saltelli
     parameters: list                   # names, in configuration order
     base: dict                         # parameter -> value of the base configuration
     grid: dict = field(default_factory=dict)   # full factorial: parameter -> values (the dataset's dimensions)
     points: list = field(default_factory=list)
+    rows: list = field(default_factory=list)   # saltelli: the point id of each sample row, in SALib's order
 
     def point(self, point_id: str) -> Point:
         for p in self.points:
@@ -210,9 +215,20 @@ def solve_sections(cfg: dict, model: str) -> dict:
 
 # ------------------------------------------------------------------------------------------ expansion
 
+def saltelli_unit_sample(dim: int, size: int, seed: int) -> np.ndarray:
+    """SALib's Saltelli design on the unit cube (scrambled Sobol' sequence, second order): size (2 dim + 2) rows
+    in the order SALib.analyze.sobol reads them."""
+    from SALib.sample import sobol as salib_sample
+
+    problem = {"num_vars": dim, "names": [f"x{i}" for i in range(dim)], "bounds": [[0.0, 1.0]] * dim}
+    return salib_sample.sample(problem, size, calc_second_order=True, scramble=True, seed=seed)
+
+
 def _unit_sample(method: str, dim: int, size: int, seed: int) -> np.ndarray:
     from scipy.stats import qmc
 
+    if method == "saltelli":
+        return saltelli_unit_sample(dim, size, seed)
     sampler = qmc.Sobol(dim, scramble=True, seed=seed) if method == "sobol" else qmc.LatinHypercube(dim, seed=seed)
     return sampler.random(size)
 
@@ -257,9 +273,12 @@ def _check_study(cfg: dict, name: str, spec: dict) -> None:
             if not lo < hi:
                 raise ConfigError(_parameter_key(name, spec, p), f"bounds must be [low, high] with low < high, "
                                                                  f"got {fmt([lo, hi])}")
-        if s["method"] == "sobol" and s["size"] & (s["size"] - 1):
+        if s["method"] in ("sobol", "saltelli") and s["size"] & (s["size"] - 1):
             raise ConfigError(f"{key}.sample.size", f"a Sobol' sample keeps its balance only at a power of 2, "
                                                     f"got {s['size']}")
+        if s["method"] == "saltelli" and len(params) < 2:
+            raise ConfigError(f"{key}.sample.bounds", f"a Saltelli design needs at least 2 parameters for Sobol' "
+                                                      f"indices, got {len(params)}")
 
 
 def _point_values(cfg: dict, spec: dict, base: dict) -> tuple[str, list, dict, list]:
@@ -329,6 +348,8 @@ def expand_study(cfg: dict, name: str) -> Study:
     seen = set()
     for values in all_values:
         pid = point_id(values)
+        if kind == "saltelli":
+            study.rows.append(pid)
         if pid in seen:
             continue
         seen.add(pid)
@@ -388,6 +409,10 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
            "wall_time", "peak_pressure_drop", "mean_pressure_drop")
+QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",   # figures, indices
+              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop")
+SOBOL_INDICES = {"sobol_first_order": "S1", "sobol_first_order_conf": "S1_conf",   # dataset name: SALib's key
+                 "sobol_total": "ST", "sobol_total_conf": "ST_conf"}
 SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement",
           "pressure_drop")
 
@@ -511,6 +536,10 @@ def study_dataset(cfg: dict, name: str, paths: dict):
         ds = ds.reindex({q: st.grid[q] for q in st.parameters}).transpose(*st.parameters, ...)
         ds["point_id"] = xr.DataArray(np.array([p.id for p in st.points], dtype=object).reshape(
             [len(st.grid[q]) for q in st.parameters]), dims=st.parameters)
+    if st.rows:
+        index = {p.id: i for i, p in enumerate(st.points)}
+        ds["saltelli_point"] = ("saltelli_row", np.array([index[r] for r in st.rows], dtype=np.int32))
+        ds = add_sobol_indices(ds, st.parameters, cfg["design_studies"][name]["sample"]["seed"])
     for k in ds.variables:
         if k in meta:
             ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
@@ -536,3 +565,32 @@ def standardised_regression_coefficients(ds, parameters, quantity: str) -> tuple
     beta, *_ = np.linalg.lstsq(np.c_[np.ones(len(ys)), Xs], ys, rcond=None)
     r2 = 1.0 - float(np.sum((ys - np.c_[np.ones(len(ys)), Xs] @ beta) ** 2)) / max(float(np.sum(ys ** 2)), 1e-300)
     return beta[1:], r2
+
+
+def map_parameters(grid: dict) -> list:
+    """The parameters of a full-factorial grid {parameter: values} that a map can span (two or more values)."""
+    return [p for p, v in grid.items() if len(v) >= 2]
+
+
+def sobol_indices(ds, parameters, quantity: str, seed: int = 0) -> dict:
+    """First-order and total Sobol' indices S1_j = V[E(y | x_j)] / V(y), ST_j = E[V(y | x_~j)] / V(y) of `quantity`
+    over a Saltelli design (y of sample row r: the point saltelli_point[r]; `parameters` in the sample's column
+    order), with the half-widths of their 95 % bootstrap confidence intervals (SALib.analyze.sobol); NaN where a
+    point has no value or y is constant. Keys: SOBOL_INDICES."""
+    from SALib.analyze import sobol
+
+    y = np.asarray(ds[quantity].values, float)[np.asarray(ds["saltelli_point"].values, int)]
+    if not np.isfinite(y).all() or np.ptp(y) == 0:
+        return {k: np.full(len(parameters), np.nan) for k in SOBOL_INDICES}
+    problem = {"num_vars": len(parameters), "names": list(parameters), "bounds": [[0.0, 1.0]] * len(parameters)}
+    res = sobol.analyze(problem, y, calc_second_order=True, conf_level=0.95, seed=seed)
+    return {k: np.asarray(res[v], float) for k, v in SOBOL_INDICES.items()}
+
+
+def add_sobol_indices(ds, parameters, seed: int = 0, quantities=QUANTITIES):
+    """`ds` with the Sobol' indices (sobol_indices) of each of `quantities` it holds, on (quantity, parameter)."""
+    qs = [q for q in quantities if q in ds]
+    res = [sobol_indices(ds, parameters, q, seed) for q in qs]
+    data = {k: (("quantity", "parameter"), np.array([r[k] for r in res], float).reshape(len(qs), len(parameters)))
+            for k in SOBOL_INDICES}
+    return ds.assign(data).assign_coords(quantity=("quantity", qs), parameter=("parameter", list(parameters)))

@@ -98,6 +98,13 @@ VARIABLES = {
     "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
     "design": ("1", "design point id (hash of its parameter values)"),
     "point_id": ("1", "design point id (hash of its parameter values)"),
+    "saltelli_point": ("1", "index along design of the point of each row of the Saltelli design (rows may repeat)"),
+    "quantity": ("1", "name of the design quantity the sensitivity indices are of"),
+    "parameter": ("1", "name of the design parameter (in the sample's column order)"),
+    "sobol_first_order": ("1", "first-order Sobol' index S1 = V[E(y | x_j)] / V(y) (SALib.analyze.sobol)"),
+    "sobol_first_order_conf": ("1", "half-width of the 95 % bootstrap confidence interval of sobol_first_order"),
+    "sobol_total": ("1", "total Sobol' index ST = E[V(y | x_~j)] / V(y) (SALib.analyze.sobol)"),
+    "sobol_total_conf": ("1", "half-width of the 95 % bootstrap confidence interval of sobol_total"),
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
     # the stability matrix (ureterfsi.stability): per recorded state of a case
     "dt": ("s", "length of the accepted time step (0 for the initial state)"),

@@ -1,18 +1,19 @@
-"""Figures of the design studies (ureterfsi.designs datasets): each quantity against each parameter, and for a
-sample the standardised regression coefficients (SRC_j = b_j s_xj / s_y of a linear least-squares fit)."""
+"""Figures of the design studies (ureterfsi.designs datasets): each quantity against each parameter; for a
+full-factorial grid a map over two parameters; for a sample a sensitivity ranking: the Sobol' indices S1, ST
+of a Saltelli design, else the standardised regression coefficients (SRC_j = b_j s_xj / s_y of a linear
+least-squares fit)."""
 from __future__ import annotations
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import itertools  # noqa: E402
+
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from .designs import PARAMETERS, standardised_regression_coefficients  # noqa: E402
-
-QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",
-              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement")
+from .designs import PARAMETERS, QUANTITIES, map_parameters, standardised_regression_coefficients  # noqa: E402
 
 
 def _parameters(ds: xr.Dataset) -> list:
@@ -45,8 +46,70 @@ def parameters_figure(ds: xr.Dataset):
     return fig
 
 
+def _label(name: str) -> str:
+    return name.replace("_", " ")
+
+
+def map_figure(ds: xr.Dataset):
+    """Each quantity (rows) as a map over the first two grid parameters with two or more values (x, y; cells
+    centred on the design points, which are marked), one column per combination of the values of the other
+    such parameters; a colour scale per quantity, in its units."""
+    grid = {d: ds[d].values for d in ds["point_id"].dims}
+    varied = map_parameters(grid)
+    if len(varied) < 2:
+        raise ValueError(f"a map needs two grid parameters with two or more values, got {varied}")
+    px, py, others = varied[0], varied[1], varied[2:]
+    fixed = {d: grid[d][0] for d in grid if d not in varied}
+    columns = list(itertools.product(*(grid[o] for o in others)))
+    quantities = [q for q in QUANTITIES if q in ds and np.isfinite(ds[q].values).any()]
+    fig, axes = plt.subplots(len(quantities), len(columns), figsize=(3.6 * len(columns) + 0.6, 2.8 * len(quantities)),
+                             squeeze=False, constrained_layout=True)
+    x, y = np.asarray(grid[px], float), np.asarray(grid[py], float)
+    xx, yy = np.meshgrid(x, y)
+    for i, q in enumerate(quantities):
+        da = ds[q].isel({d: 0 for d in fixed})
+        vmin, vmax = float(np.nanmin(da.values)), float(np.nanmax(da.values))
+        for j, combo in enumerate(columns):
+            ax = axes[i, j]
+            c = da.sel(dict(zip(others, combo))).transpose(py, px).values
+            mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(c), shading="nearest", vmin=vmin, vmax=vmax)
+            ax.plot(xx.ravel(), yy.ravel(), "k.", ms=5)
+            fig.colorbar(mesh, ax=ax, label=f"{_label(q)} [{ds[q].attrs['units']}]")
+            ax.set_xlabel(f"{_label(px)} [{PARAMETERS[px].units}]")
+            ax.set_ylabel(f"{_label(py)} [{PARAMETERS[py].units}]")
+            if others:
+                ax.set_title(", ".join(f"{_label(o)} = {v:g} {PARAMETERS[o].units}" for o, v in zip(others, combo)),
+                             fontsize=8)
+    at = ", ".join(f"{_label(d)} = {float(v):g} {PARAMETERS[d].units}" for d, v in fixed.items())
+    fig.suptitle(ds.attrs.get("title", "") + (f"\n{at}" if at else ""), fontsize=9)
+    return fig
+
+
+def sobol_figure(ds: xr.Dataset):
+    """First-order and total Sobol' indices S1, ST of each quantity (panels) per parameter, bars with their 95 %
+    confidence intervals (ureterfsi.designs.sobol_indices)."""
+    params = [str(p) for p in ds["parameter"].values]
+    quantities = [str(q) for q in ds["quantity"].values if np.isfinite(ds["sobol_total"].sel(quantity=q).values).any()]
+    n = max(len(quantities), 1)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n + 1.2, 0.5 * len(params) + 1.8), squeeze=False, sharey=True)
+    pos = np.arange(len(params))
+    for ax, q in zip(axes[0], quantities):
+        for k, (name, label, shift) in enumerate((("sobol_first_order", "S1", -0.2), ("sobol_total", "ST", 0.2))):
+            ax.barh(pos + shift, ds[name].sel(quantity=q).values, height=0.38, label=label,
+                    xerr=ds[f"{name}_conf"].sel(quantity=q).values, capsize=2)
+        ax.set_yticks(pos, [_label(p) for p in params])
+        ax.set_title(_label(q), fontsize=9)
+        ax.set_xlabel("Sobol' index")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
+    return fig
+
+
 def sensitivity_figure(ds: xr.Dataset):
-    """Standardised regression coefficients of each quantity on the parameters (R^2 of the fit in the title)."""
+    """The Sobol' indices of a Saltelli design (sobol_figure); else the standardised regression coefficients of
+    each quantity on the parameters (R^2 of the fit in the title)."""
+    if "sobol_total" in ds:
+        return sobol_figure(ds)
     params, flat = _parameters(ds), _flat(ds)
     quantities = [q for q in QUANTITIES if q in ds and np.isfinite(ds[q].values).any()]
     fig, axes = plt.subplots(1, len(quantities), figsize=(2.4 * len(quantities), 2.6), squeeze=False, sharey=True)

@@ -247,15 +247,33 @@ def stability_inputs(w):
 
 
 def design_figures(study):
-    """The figure files of a design study: parameters, and sensitivity for sampled studies."""
-    kinds = ["parameters"] + (
-        ["sensitivity"] if DESIGNS[study].kind in ("sobol", "latin_hypercube") else []
-    )
+    """The figure files of a design study: parameters; a map for a full-factorial grid over two or more
+    parameters with two or more values; sensitivity for sampled studies."""
+    st = DESIGNS[study]
+    kinds = ["parameters"]
+    if len(ureter_designs.map_parameters(st.grid)) >= 2:
+        kinds.append("map")
+    if st.kind in ("sobol", "latin_hypercube", "saltelli"):
+        kinds.append("sensitivity")
     return [
         f"results/figures/designs/{study}_{k}.{ext}"
         for k in kinds
         for ext in FIGURE_FORMATS
     ]
+
+
+def design_figure_outputs(kind):
+    """results/figures/designs/{design_study}_<kind>.<ext> for every configured format; the report format
+    goes into the report (caption workflow/report/design_<kind>.rst)."""
+    out = []
+    for ext in FIGURE_FORMATS:
+        path = f"results/figures/designs/{{design_study}}_{kind}.{ext}"
+        if ext == REPORT_FORMAT:
+            path = report(
+                path, caption=f"../report/design_{kind}.rst", category="Design studies"
+            )
+        out.append(path)
+    return out
 
 
 def design_mesh_inputs(w):

@@ -4,7 +4,7 @@
 #   results/designs/wall_motion/{wall_id}.nc    design_wall_motion (one-way rung)
 #   results/designs/{study}/{point}/run.nc      design_solve
 #   results/designs/{study}.nc                  design_dataset
-#   results/figures/designs/{study}_*.{ext}     design_figures
+#   results/figures/designs/{study}_*.{ext}     design_figures, design_map, design_sensitivity
 # Targets: design_<study> per study, designs_all.
 DESIGN_MESHES = {p.mesh_id: (st, p) for st in DESIGNS.values() for p in st.points}
 DESIGN_WALLS = {p.wall_id: p for st in DESIGNS.values() for p in st.points if p.wall_id}
@@ -86,12 +86,21 @@ if DESIGNS:
         input:
             "results/designs/{design_study}.nc",
         output:
-            [
-                f"results/figures/designs/{{design_study}}_parameters.{ext}"
-                for ext in FIGURE_FORMATS
-            ],
+            design_figure_outputs("parameters"),
         log:
             "results/logs/designs/{design_study}_figures.log",
+        params:
+            dpi=FIGURE_OPTIONS["dpi"],
+        script:
+            "../scripts/design_figures.py"
+
+    rule design_map:
+        input:
+            "results/designs/{design_study}.nc",
+        output:
+            design_figure_outputs("map"),
+        log:
+            "results/logs/designs/{design_study}_map.log",
         params:
             dpi=FIGURE_OPTIONS["dpi"],
         script:
@@ -101,10 +110,7 @@ if DESIGNS:
         input:
             "results/designs/{design_study}.nc",
         output:
-            [
-                f"results/figures/designs/{{design_study}}_sensitivity.{ext}"
-                for ext in FIGURE_FORMATS
-            ],
+            design_figure_outputs("sensitivity"),
         log:
             "results/logs/designs/{design_study}_sensitivity.log",
         params:
