@@ -15,6 +15,7 @@ import math
 import pytest
 
 from ureterfsi import calibration as C
+from ureterfsi.scenes.wall_rz import WallModel, wall_material, wall_radii
 
 MM = 1e-3
 
@@ -30,7 +31,7 @@ def default_cfg():
 @pytest.fixture(scope="module")
 def wall(default_cfg):
     """The static r-z wall model of the default config (4 cells through the wall, 200 along)."""
-    return C.WallModel(default_cfg, nr=4)
+    return WallModel(default_cfg, nr=4)
 
 
 def test_plane_strain_estimate_matches_config_comment(default_cfg):
@@ -47,7 +48,7 @@ def test_plane_strain_estimate_small_load_is_linear(default_cfg):
     sigma_r(Ro) - sigma_r(Ri) = p gives B = p / (2 mu0 (1/Ri^2 - 1/Ro^2))."""
     cfg = copy.deepcopy(default_cfg)
     q = 1e-4
-    Ri, Ro = C.wall_radii(cfg)
+    Ri, Ro = wall_radii(cfg)
     mu0 = 2.0 * (cfg["ureter"]["c10"] + cfg["ureter"]["c01"])
     p = q * cfg["peristalsis"]["peak_traction"]
     B = p / (2.0 * mu0 * (1.0 / Ri**2 - 1.0 / Ro**2))
@@ -60,11 +61,11 @@ def test_solver_uniform_load_sliding_ends_is_plane_strain(default_cfg):
     the O(p / kappa) compressibility offset (~4e-4 relative at kappa = 1e9) from the comparison."""
     cfg = copy.deepcopy(default_cfg)
     cfg["ureter"]["bulk_modulus"] = 1.0e12
-    Ri, Ro = C.wall_radii(cfg)
-    ri, ro = C.plane_strain_outer_radius(Ri, Ro, C._material(cfg), cfg["peristalsis"]["peak_traction"])
+    Ri, Ro = wall_radii(cfg)
+    ri, ro = C.plane_strain_outer_radius(Ri, Ro, wall_material(cfg), cfg["peristalsis"]["peak_traction"])
     errors = []
     for nr in (2, 4, 8):
-        model = C.WallModel(cfg, nr=nr, nz=1, length=0.5 * MM, load="uniform", ends="sliding")
+        model = WallModel(cfg, nr=nr, nz=1, length=0.5 * MM, load="uniform", ends="sliding")
         u_out, _, u_in = model.solve_static()
         errors.append(abs(u_out / (ro - Ro) - 1.0))
         assert u_in == pytest.approx(ri - Ri, rel=5.0 * errors[-1] + 1e-6)

@@ -271,18 +271,18 @@ def test_strictured_wall_model(mini):
     tagged."""
     from dolfinx.mesh import compute_midpoints
 
-    from ureterfsi.calibration import INNER, OUTER, WallModel
+    from ureterfsi.scenes.wall_rz import WallModel
 
     cfg = load_config(mini, {"geometry": {"stricture_fraction": 0.5, "stricture_length": 0.004,
                                           "stricture_position": 0.005}})
     geom, wall = UreterGeometry.from_config(cfg), WallModel(cfg, nr=4)
     x = wall.problem.mesh.geometry.x
     ft = wall.scene.facet_tags
-    assert ft.find(INNER).size == ft.find(OUTER).size == wall.nz
+    assert ft.find(tags.FLUID_URETER).size == ft.find(tags.URETER_OUTER).size == wall.nz
     mesh = wall.problem.mesh
     mesh.topology.create_connectivity(1, 0)
     f2v = mesh.topology.connectivity(1, 0)
-    for tag, radius in ((INNER, geom.inner_radius), (OUTER, geom.outer_radius)):
+    for tag, radius in ((tags.FLUID_URETER, geom.inner_radius), (tags.URETER_OUTER, geom.outer_radius)):
         verts = np.unique(np.concatenate([f2v.links(f) for f in ft.find(tag)]))
         xv = compute_midpoints(mesh, 0, verts.astype(np.int32))
         assert verts.size == wall.nz + 1 and np.abs(xv[:, 0] - radius(xv[:, 1])).max() < 1e-12

@@ -8,6 +8,8 @@ target `stability` (results/datasets/stability.nc, results/figures/stability_map
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -154,6 +156,23 @@ def test_a_broken_case_is_recorded_not_raised(cfg, rz_mesh):
     assert ds["outcome"].item() == "failed" and ds["limit"].item() == "exception"
     assert ds["diagnosis"].item().startswith("exception: ValueError: mesh motion: 'harmonic' or 'elastic'")
     assert ds["steps"].item() == 0 and math.isnan(ds["max_kinetic_energy"].item())
+
+
+def test_case_files_hold_the_case_scalars_in_order(runs):
+    """combine and the figures read the per-case scalars of CaseScalars, in its field order."""
+    for ds in runs.values():
+        assert tuple(k for k, v in ds.data_vars.items() if v.ndim == 0) == S.SCALARS
+        assert ds["steps"].item() > 0
+
+
+def test_the_package_reads_cases_and_datasets_without_dolfinx():
+    """Config validation and the stability figures import the package; only run_case needs dolfinx."""
+    code = ("import sys\nfor m in ('dolfinx', 'petsc4py', 'mpi4py', 'ufl'):\n    sys.modules[m] = None\n"
+            "import ureterfsi.stability as S\nassert 'ureterfsi.stability.run' not in sys.modules\n"
+            "S.cases, S.combine, S.SCALARS\n"
+            "try:\n    S.run_case\nexcept ImportError:\n    print('ok')\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
 
 
 def test_matrix_dataset_and_stability_map(runs, hole_run, tmp_path):

@@ -6,10 +6,10 @@ the exact plane-strain inflation of the wall tube gives ~1 mm. This module
 
 * `plane_strain_estimate`: that exact plane-strain number (incompressible tube R_i < R < R_o, outward
   dead traction p0 per reference area on the OUTER surface, inner surface free);
-* `wall_response`: the same quantity from the FSI engine on the real load - an axisymmetric (r-z)
-  wall-only scene, rectangle [R_i, R_o] x [0, L], Mooney-Rivlin mixed u-pi, both ends z = 0, L fixed,
-  the travelling Gaussian outward dead traction of the config on the outer surface, inner surface
-  traction-free. The urine pressure is left out: it is ~10^2 Pa (reference pressure 130 Pa plus the
+* `wall_response`: the same quantity from the FSI engine on the real load - the axisymmetric (r-z)
+  wall-only scene (ureterfsi.scenes.wall_rz.WallModel), rectangle [R_i, R_o] x [0, L], Mooney-Rivlin
+  mixed u-pi, both ends z = 0, L fixed, the travelling Gaussian outward dead traction of the config on the
+  outer surface, inner surface traction-free. The urine pressure is left out: it is ~10^2 Pa (reference pressure 130 Pa plus the
   peristaltic pressure differences) against a peak load of 5e4 Pa, a < 0.3 % perturbation.
   mode "static": the pulse frozen with its centre at mid-length (steady solve, the worst case away from
   the clamped ends); mode "transient": the travelling load with inertia (BDF2) over the time window,
@@ -34,33 +34,18 @@ import time as _time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq
 
-from ureterfsi.geometry import Stricture
-
-log = logging.getLogger("ureterfsi.calibration")
-
-# facet / cell tags of the r-z wall scene
-WALL, INNER, OUTER, ENDS = 1, 1, 2, 3
+from ureterfsi.config import DEFAULT_CONFIG, load_config_files
+from ureterfsi.fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
+from ureterfsi.provenance import provenance_attrs, write_json
+from ureterfsi.scenes.wall_rz import WallModel, wall_material, wall_radii
+from ureterfsi.verification import mooney_rivlin_tube_pressure
 
 
 # ------------------------------------------------------------------------------------------------
 # exact plane strain
 # ------------------------------------------------------------------------------------------------
-def wall_radii(cfg) -> tuple[float, float]:
-    g = cfg["geometry"]
-    Ro = 0.5 * g["ureter_outer_diameter"]
-    return Ro - g["ureter_wall_thickness"], Ro
-
-
-def _material(cfg, coefficient_scale=1.0):
-    from ureterfsi.fsi import MooneyRivlin
-
-    u = cfg["ureter"]
-    s = coefficient_scale
-    return MooneyRivlin(s * u["c10"], s * u["c01"], s * u["c20"], s * u["c02"], s * u["c11"],
-                        u["bulk_modulus"], u["density"])
-
-
 def plane_strain_outer_radius(Ri, Ro, mat, outer_dead_load) -> tuple[float, float]:
     """Deformed (r_i, r_o) of the incompressible plane-strain tube under an outward dead load p0 per
     reference area on the outer surface (P N = p0 N), inner surface free.
@@ -69,10 +54,6 @@ def plane_strain_outer_radius(Ri, Ro, mat, outer_dead_load) -> tuple[float, floa
     sigma_r(r_o) - sigma_r(r_i) = int (sigma_t - sigma_r) dr / r, which is
     ureterfsi.verification.mooney_rivlin_tube_pressure(r_i); here sigma_r(r_i) = 0 and the Cauchy traction
     on the deformed outer surface is p0 R_o / r_o (force per unit length p0 R_o dTheta = sigma_r r_o dtheta)."""
-    from scipy.optimize import brentq
-
-    from ureterfsi.verification import mooney_rivlin_tube_pressure
-
     def ro_of(ri):
         return math.sqrt(Ro**2 + ri**2 - Ri**2)
 
@@ -88,7 +69,7 @@ def plane_strain_estimate(cfg, load_scale=1.0, coefficient_scale=1.0) -> float:
     dead traction equal to the peak load `peristalsis.peak_traction` (times load_scale)."""
     Ri, Ro = wall_radii(cfg)
     p0 = load_scale * cfg["peristalsis"]["peak_traction"]
-    _, ro = plane_strain_outer_radius(Ri, Ro, _material(cfg, coefficient_scale), p0)
+    _, ro = plane_strain_outer_radius(Ri, Ro, wall_material(cfg, coefficient_scale), p0)
     return ro - Ro
 
 
@@ -111,165 +92,6 @@ class WallResponse:
 
     def as_dict(self):
         return asdict(self)
-
-
-class WallModel:
-    """Axisymmetric (x = r, y = z) wall-only scene with load and coefficient scales held in UFL constants,
-    so a sequence of solves (continuation, calibration) shares one compiled form.
-
-    load: "pulse" (the Gaussian of cfg["peristalsis"]: frozen at a centre for static solves, travelling
-    as `ureter.peristaltic_traction` in transient runs) or "uniform" (the peak traction everywhere).
-    ends: "fixed" (u = v = 0 at z = 0, L, paper eq. 20) or "sliding" (u_z = v_z = 0 only).
-    """
-
-    def __init__(self, cfg, nr=4, nz=None, length=None, load="pulse", travelling=False, ends="fixed",
-                 options=None):
-        import ufl
-        from dolfinx import fem
-        from dolfinx import mesh as dmesh
-        from mpi4py import MPI
-
-        from ureterfsi.fsi import DirichletCondition, MonolithicFSI, Scene, SolidRegion, SolverOptions, SurfaceLoad
-        from ureterfsi.fsi.tagging import tag_cells, tag_facets
-        from ureterfsi.scenes.ureter import peristaltic_traction, pulse_sigma
-
-        if load not in ("pulse", "uniform") or ends not in ("fixed", "sliding"):
-            raise ValueError(f"load 'pulse'|'uniform', ends 'fixed'|'sliding'; got {load!r}, {ends!r}")
-        self.cfg = cfg
-        self.Ri, self.Ro = Ri, Ro = wall_radii(cfg)
-        self.length = L = length if length is not None else cfg["geometry"]["length"]
-        h = (Ro - Ri) / nr
-        nz = nz if nz is not None else max(1, int(round(L / h)))
-        self.nr, self.nz = nr, nz
-        mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.array([Ri, 0.0]), np.array([Ro, L])], (nr, nz),
-                                      diagonal=dmesh.DiagonalType.right)
-        tol = 1e-9 * L
-        ct = tag_cells(mesh, {WALL: lambda x: np.full(x.shape[1], True)})
-        ft = tag_facets(mesh, {INNER: lambda x: np.isclose(x[0], Ri, atol=tol),
-                               OUTER: lambda x: np.isclose(x[0], Ro, atol=tol),
-                               ENDS: lambda x: np.isclose(x[1], 0.0, atol=tol) | np.isclose(x[1], L, atol=tol)})
-        self.stricture = Stricture.from_geometry(cfg["geometry"])
-        if self.stricture.fraction > 0:  # tagged straight, then both surfaces moved inward by R_i f b(z)
-            mesh.geometry.x[:, 0] += self.stricture.shift(mesh.geometry.x[:, 1], Ri)
-
-        self.load_scale = fem.Constant(mesh, 1.0)
-        self.coefficient_scale = fem.Constant(mesh, 1.0)
-        self.centre = fem.Constant(mesh, 0.5 * L)
-        u = cfg["ureter"]
-        mat = _material(cfg)
-        cs = self.coefficient_scale
-        # the five coefficients as UFL products (scaled without recompiling); kappa stays fixed
-        mat = type(mat)(cs * u["c10"], cs * u["c01"], cs * u["c20"], cs * u["c02"], cs * u["c11"],
-                        u["bulk_modulus"], u["density"])
-        per = cfg["peristalsis"]
-        sign = 1.0 if per["direction"] == "outward" else -1.0
-        amp, sigma = per["peak_traction"], pulse_sigma(per)
-        scale, centre = self.load_scale, self.centre
-        self.travelling = travelling and load == "pulse"
-        if load == "uniform":
-            def traction(X, t, N):
-                return scale * sign * amp * N
-        elif self.travelling:
-            moving = peristaltic_traction(per, axial_component=1)
-
-            def traction(X, t, N):
-                return scale * moving(X, t, N)
-        else:
-            def traction(X, t, N):
-                return scale * sign * amp * ufl.exp(-((X[1] - centre) ** 2) / (2.0 * sigma**2)) * N
-
-        if ends == "fixed":
-            dirichlet = [DirichletCondition("displacement", [ENDS]), DirichletCondition("velocity", [ENDS])]
-        else:
-            dirichlet = [DirichletCondition("displacement", [ENDS], components=[1]),
-                         DirichletCondition("velocity", [ENDS], components=[1])]
-        self.scene = Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([WALL], mat)],
-                           loads=[SurfaceLoad([OUTER], traction)], dirichlet=dirichlet, axisymmetric=True,
-                           name=f"ureter-wall-rz-{load}-{ends}")
-        self.options = options or SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25)
-        t0 = _time.perf_counter()
-        self.problem = MonolithicFSI(self.scene, self.options)
-        self.setup_time = _time.perf_counter() - t0
-        # outer / inner surface nodes of the displacement space (P2: vertices and edge midpoints)
-        self._V, self._map = self.problem.sub("displacement").collapse()
-        xyz = self._V.tabulate_dof_coordinates()
-        self._outer, self._inner = self.surface_dofs(self._V, OUTER), self.surface_dofs(self._V, INNER)
-        self._z = xyz[:, 1]
-        self.comm = mesh.comm
-        self.newton_iterations = 0
-        # (load scale, coefficient scale, pulse centre) of the current, converged state (x = 0: no load)
-        self.state_params = (0.0, 1.0, 0.5 * L)
-
-    def surface_dofs(self, V, facet_tag: int) -> np.ndarray:
-        """Owned dofs of a (collapsed) space of this scene on the INNER or OUTER facets, ascending."""
-        from dolfinx import fem
-
-        dofs = fem.locate_dofs_topological(V, 1, self.scene.facet_tags.find(facet_tag))
-        return np.unique(dofs[dofs < V.dofmap.index_map.size_local])
-
-    # -------------------------------------------------------------------------------------------
-    def mesh_info(self) -> dict:
-        pb = self.problem
-        tdim = pb.mesh.topology.dim
-        return {"cells_r": self.nr, "cells_z": self.nz, "element_size": (self.Ro - self.Ri) / self.nr,
-                "cells": self.comm.allreduce(pb.mesh.topology.index_map(tdim).size_local),
-                "dofs": pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs,
-                "element": "triangle, P2 velocity/displacement, P0 solid pressure (axisymmetric r-z)",
-                "length": self.length}
-
-    def radial_extrema(self):
-        """(max u_r on the outer surface, its z, max u_r on the inner surface) of the current state."""
-        from mpi4py import MPI
-
-        arr = self.problem.x.x.array[self._map].reshape(-1, 2)
-        ur = arr[:, 0]
-        best = (-np.inf, 0.0)
-        if self._outer.size:
-            k = self._outer[np.argmax(ur[self._outer])]
-            best = (float(ur[k]), float(self._z[k]))
-        inner = float(ur[self._inner].max()) if self._inner.size else -np.inf
-        allbest = self.comm.allgather(best)
-        umax, z = max(allbest)
-        return umax, z, self.comm.allreduce(inner, op=MPI.MAX)
-
-    def _steady(self):
-        its, _ = self.problem.solve_steady()
-        self.newton_iterations += its
-        return its
-
-    def solve_static(self, load_scale=1.0, coefficient_scale=1.0, centre=None, max_halvings=8):
-        """Steady solve at the given scales (and frozen pulse centre, m), continued from the current
-        converged state; a failing jump is halved along the straight line between the two parameter sets."""
-        from ureterfsi.fsi import NewtonDivergence
-
-        pb = self.problem
-        start = np.array(self.state_params, dtype=float)
-        goal = np.array([load_scale, coefficient_scale, start[2] if centre is None else centre], dtype=float)
-        consts = (self.load_scale, self.coefficient_scale, self.centre)
-        done, frac = 0.0, 1.0
-        halvings = 0
-        while done < 1.0 - 1e-12:
-            trial = min(1.0, done + frac)
-            params = start + trial * (goal - start)
-            saved = pb.x.x.array.copy()
-            for c, v in zip(consts, params):
-                c.value = v
-            try:
-                self._steady()
-            except NewtonDivergence:
-                pb.x.x.array[:] = saved
-                pb.invalidate_jacobian()
-                halvings += 1
-                if halvings > max_halvings:
-                    for c, v in zip(consts, self.state_params):
-                        c.value = v
-                    raise
-                frac *= 0.5
-                log.info("static solve: halving the continuation step to %.3g", frac)
-                continue
-            done = trial
-            self.state_params = tuple(float(v) for v in params)
-        return self.radial_extrema()
 
 
 def _result_static(model: WallModel, load_scale, coefficient_scale, wall0) -> WallResponse:
@@ -295,10 +117,6 @@ def wall_response(cfg, load_scale=1.0, coefficient_scale=1.0, mode="static", nr=
         return _result_static(model, load_scale, coefficient_scale, wall0)
     if mode != "transient":
         raise ValueError(f"mode 'static' or 'transient', got {mode!r}")
-
-    from ureterfsi.fsi import Observer, TimeIntegrator, TimeSettings
-
-    from ureterfsi.fsi import SolverOptions
 
     # modified Newton (the factorisation is kept while Newton contracts): the load moves 0.2 mm a step
     model = WallModel(cfg, nr=nr, nz=nz, travelling=True,
@@ -511,8 +329,6 @@ SECTIONS = ("geometry", "ureter", "peristalsis", "time")   # the only config sec
 
 def write_report(cfg, path, **kwargs) -> dict:
     """Run `report`, add provenance (hash of the sections used), write JSON atomically; returns it."""
-    from ureterfsi.provenance import provenance_attrs, write_json
-
     r = report(cfg, **kwargs)
     r["provenance"] = provenance_attrs({k: cfg[k] for k in SECTIONS})
     write_json(path, r)
@@ -520,8 +336,6 @@ def write_report(cfg, path, **kwargs) -> dict:
 
 
 def main(argv=None) -> int:
-    from ureterfsi.config import DEFAULT_CONFIG, load_config_files
-
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.calibration", description=__doc__.split("\n")[0])
     ap.add_argument("configs", nargs="*", default=[str(DEFAULT_CONFIG)])
     ap.add_argument("--json", help="write the report as JSON (atomically)")

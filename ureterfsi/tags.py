@@ -1,7 +1,8 @@
 """Integer tags of subdomains (cells) and boundaries (facets) shared by every mesh of the project.
 
 Cell tags name physical regions; facet tags name boundaries and interfaces. Every boundary facet
-carries exactly one facet tag; interfaces between subdomains are tagged facets too.
+carries exactly one facet tag; interfaces between subdomains are tagged facets too. The r-z wall-only scene
+(ureterfsi.scenes.wall_rz) carries the ureter wall's tags: URETER; FLUID_URETER, URETER_OUTER, URETER_ENDS.
 """
 
 # Cells (gmsh physical volumes in 3D, physical surfaces in 2D)

@@ -26,7 +26,7 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
     return ""
 
 
-# the geometry the r-z wall solve reads (ureterfsi.calibration.WallModel): the stent and its holes do not enter
+# the geometry the r-z wall solve reads (ureterfsi.scenes.wall_rz.WallModel): the stent and its holes do not enter
 WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
                  "stricture_position")
 

@@ -1,1 +1,6 @@
-"""Scenes for the generic FSI engine (ureterfsi.fsi) other than the ureter: verification benchmarks."""
+"""Scenes posed to the generic FSI engine (ureterfsi.fsi).
+
+ureter      the stented ureter (paper §2), and the urine alone of the one-way rung
+wall_rz     the ureter wall alone in r-z: the calibration's and the one-way rung's wall step
+turek_hron  the Turek-Hron FSI1-3 benchmarks
+"""

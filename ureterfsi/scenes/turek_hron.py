@@ -26,9 +26,11 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import gmsh
 import numpy as np
 import ufl
 from dolfinx import fem, geometry
+from dolfinx.io import gmshio
 from mpi4py import MPI
 
 from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI,
@@ -133,8 +135,6 @@ def _cache_dir() -> Path:
 def write_mesh(path, refinement: float = 1.0, geom: Geometry = GEOMETRY, tags: Tags = TAGS) -> dict:
     """Mesh the benchmark with gmsh OCC (triangles, first order) and write it to `path` (msh 4.1).
     Call on one rank. Returns counts of the physical groups."""
-    import gmsh
-
     h_near, h_far = _mesh_sizes(refinement)
     L, H, (cx, cy), r = geom.length, geom.height, geom.centre, geom.radius
     y0, y1 = cy - 0.5 * geom.flag_thickness, cy + 0.5 * geom.flag_thickness
@@ -224,9 +224,6 @@ def read_mesh(path, comm=MPI.COMM_WORLD, gdim: int = 2):
 
     dolfinx 0.5.2's gmshio.read_from_msh is broken (it finalizes gmsh and returns an undefined name
     on the reading rank), so this does what it means to: merge on rank 0, model_to_mesh on all ranks."""
-    import gmsh
-    from dolfinx.io import gmshio
-
     if comm.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)

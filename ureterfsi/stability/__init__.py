@@ -9,14 +9,22 @@ cases     the axes as data, the cases of a configuration and the configuration o
 limits    the limits and the StabilityLimit a case ends with
 observer  energies, volume balance and limits after every accepted step (an engine Observer; dolfinx)
 run       run_case: one case -> its dataset, the failure classified from the engine's exceptions and records
-dataset   the per-case file, the combined matrix, its outcome table
+dataset   the per-case scalars (CaseScalars), the per-case file, the combined matrix, its outcome table
 """
 from .cases import AXES, AXIS, AXIS_PARAMETER, SCENES, SYMMETRY, Axis, Case, case_by_name, case_setup, cases
 from .cases import format_value, settings
-from .dataset import CASE_FILE, PER_STEP, SCALARS, SERIES, combine, outcome_table, write_case
+from .dataset import CASE_FILE, PER_STEP, SCALARS, SERIES, CaseScalars, combine, outcome_table, write_case
 from .limits import LIMITS, StabilityLimit
-from .run import run_case
 
-__all__ = ["AXES", "AXIS", "AXIS_PARAMETER", "Axis", "CASE_FILE", "Case", "LIMITS", "PER_STEP", "SCALARS", "SCENES",
-           "SERIES", "SYMMETRY", "StabilityLimit", "case_by_name", "case_setup", "cases", "combine", "format_value",
-           "outcome_table", "run_case", "settings", "write_case"]
+
+def __getattr__(name):
+    # run (and observer) import dolfinx: config validation and the figures read the rest without it
+    if name == "run_case":
+        from .run import run_case
+        return run_case
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["AXES", "AXIS", "AXIS_PARAMETER", "Axis", "CASE_FILE", "Case", "CaseScalars", "LIMITS", "PER_STEP",
+           "SCALARS", "SCENES", "SERIES", "SYMMETRY", "StabilityLimit", "case_by_name", "case_setup", "cases",
+           "combine", "format_value", "outcome_table", "run_case", "settings", "write_case"]

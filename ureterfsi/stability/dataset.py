@@ -2,6 +2,8 @@
 dolfinx: read by the figures)."""
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
+
 import numpy as np
 import xarray as xr
 
@@ -16,14 +18,56 @@ SERIES = ("time", "dt", "kinetic_energy", "kinetic_energy_fluid", "kinetic_energ
           "volume_from_flux", "outlet_flux", "inlet_flux", "min_ale_jacobian", "max_displacement", "max_speed")
 PER_STEP = tuple(k for k in SERIES if k != "time") + ("volume_balance_error", "newton_iterations",
                                                        "step_wall_time")
-# the per-case scalars of a case file (run_case), in the order written
-SCALARS = ("axis", "value_label", "outcome", "limit", "diagnosis", "failure_time", "failure_r", "failure_z",
-           "pulse_centre_at_failure", "scene", "time_step", "mesh_level", "cells", "dofs", "hole_elements",
-           "is_baseline", "hole_elements_measured", "hole_channels_found", "mesh_min_quality", "bulk_ratio",
-           "density_ratio", "peak_traction", "wave_speed", "wave_width", "dynamic_viscosity", "end_time",
-           "reached_time", "steps", "max_kinetic_energy", "max_energy_ratio", "displaced_volume", "volume_error",
-           "min_jacobian", "peak_displacement", "peak_speed", "total_newton_iterations", "mean_newton_iterations",
-           "max_newton_iterations", "step_halvings", "factorisations", "wall_time", "wall_time_per_step")
+
+
+@dataclass(frozen=True)
+class CaseScalars:
+    """The per-case scalars of a case file (run_case), in the order written."""
+    axis: str
+    value_label: str
+    outcome: str
+    limit: str
+    diagnosis: str
+    failure_time: float
+    failure_r: float
+    failure_z: float
+    pulse_centre_at_failure: float
+    scene: str
+    time_step: float
+    mesh_level: str
+    cells: int
+    dofs: int
+    hole_elements: float
+    is_baseline: int
+    hole_elements_measured: float
+    hole_channels_found: int
+    mesh_min_quality: float
+    bulk_ratio: float
+    density_ratio: float
+    peak_traction: float
+    wave_speed: float
+    wave_width: float
+    dynamic_viscosity: float
+    end_time: float
+    reached_time: float
+    steps: int
+    max_kinetic_energy: float
+    max_energy_ratio: float
+    displaced_volume: float
+    volume_error: float
+    min_jacobian: float
+    peak_displacement: float
+    peak_speed: float
+    total_newton_iterations: int
+    mean_newton_iterations: float
+    max_newton_iterations: int
+    step_halvings: int
+    factorisations: int
+    wall_time: float
+    wall_time_per_step: float
+
+
+SCALARS = tuple(f.name for f in fields(CaseScalars))
 # what combine reads in a per-case file (run_case)
 CASE_FILE = Contract("stability case file", attrs=("case",), variables=("case", "step", "time", "outcome"))
 

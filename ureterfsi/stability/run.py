@@ -6,17 +6,27 @@ import logging
 import math
 import tempfile
 import time as _time
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from mpi4py import MPI
 
 from ..checked_io import MESH_SIDECAR, read_json
+from ..fsi import MonolithicFSI, NewtonDivergence, TimeIntegrator, TimeSettings
+from ..fsi.integrator import MeshInversion, StepFailure
+from ..geometry import UreterGeometry
+from ..mesh import build_mesh, load_mesh
 from ..metadata import annotate
 from ..provenance import provenance_attrs
+from ..scenes.ureter import pulse_centre, ureter_scene
+from ..study.oneway import fluid_problem, wall_history
+from ..study.options import solver_options
 from .cases import SCENES, Case, case_setup, format_value, settings
-from .dataset import SCALARS, SERIES
+from .dataset import SERIES, CaseScalars
 from .limits import StabilityLimit
+from .observer import StabilityObserver
 
 log = logging.getLogger("ureterfsi.stability")
 
@@ -67,17 +77,6 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
     end: override of the simulated time (short CI runs). Never raises for a failing case: the failure
     is the outcome, with its diagnosis.
     """
-    from mpi4py import MPI
-
-    from ..fsi import MonolithicFSI, NewtonDivergence, TimeIntegrator, TimeSettings
-    from ..fsi.integrator import MeshInversion, StepFailure
-    from ..geometry import UreterGeometry
-    from ..mesh import build_mesh, load_mesh
-    from ..study.oneway import fluid_problem, wall_history
-    from ..scenes.ureter import pulse_centre, ureter_scene
-    from ..study.options import solver_options
-    from .observer import StabilityObserver
-
     wall0 = _time.perf_counter()
     st = settings(cfg)
     setup = case_setup(cfg, case)
@@ -186,50 +185,48 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
             diagnosis += f" [where: {what} {_place(where)}, {region}; pulse centre at z = {zc * 1e3:.2f} mm]"
         elif math.isfinite(zc):
             diagnosis += f" [pulse centre at z = {zc * 1e3:.2f} mm]"
-    scalars = {
-        "axis": case.axis if case.axis != "baseline" else "baseline",
-        "value_label": "" if case.value is None else format_value(case.value),
-        "outcome": "stable" if failure is None else "failed",
-        "limit": "none" if failure is None else failure.limit,
-        "diagnosis": diagnosis,
-        "failure_time": ttime,
-        "failure_r": failure.where[0] if failure is not None else math.nan,
-        "failure_z": failure.where[1] if failure is not None else math.nan,
-        "pulse_centre_at_failure": zc,
-        "scene": setup["scene"],
-        "time_step": params["time_step"], "mesh_level": params["mesh_level"], "cells": cells, "dofs": dofs,
-        "hole_elements": params["hole_elements"], "is_baseline": params["is_baseline"],
-        "hole_elements_measured": float(sidecar.get("hole_elements_across", math.nan)),
-        "hole_channels_found": int(sidecar.get("hole_channels_found", 0)),
-        "mesh_min_quality": float(sidecar.get("quality_minSICN", {}).get("min", math.nan)),
-        "bulk_ratio": params["bulk_ratio"], "density_ratio": params["density_ratio"],
-        "peak_traction": params["peak_traction"], "wave_speed": params["wave_speed"],
-        "wave_width": params["wave_width"], "dynamic_viscosity": params["dynamic_viscosity"],
-        "end_time": params["end_time"],
-        "reached_time": series["time"][-1] if n else math.nan,
-        "steps": max(n - 1, 0),
-        "max_kinetic_energy": float(np.nanmax(ke)) if n else math.nan,
+    scalars = CaseScalars(
+        axis=case.axis if case.axis != "baseline" else "baseline",
+        value_label="" if case.value is None else format_value(case.value),
+        outcome="stable" if failure is None else "failed",
+        limit="none" if failure is None else failure.limit,
+        diagnosis=diagnosis,
+        failure_time=ttime,
+        failure_r=failure.where[0] if failure is not None else math.nan,
+        failure_z=failure.where[1] if failure is not None else math.nan,
+        pulse_centre_at_failure=zc,
+        scene=setup["scene"],
+        time_step=params["time_step"], mesh_level=params["mesh_level"], cells=cells, dofs=dofs,
+        hole_elements=params["hole_elements"], is_baseline=params["is_baseline"],
+        hole_elements_measured=float(sidecar.get("hole_elements_across", math.nan)),
+        hole_channels_found=int(sidecar.get("hole_channels_found", 0)),
+        mesh_min_quality=float(sidecar.get("quality_minSICN", {}).get("min", math.nan)),
+        bulk_ratio=params["bulk_ratio"], density_ratio=params["density_ratio"],
+        peak_traction=params["peak_traction"], wave_speed=params["wave_speed"],
+        wave_width=params["wave_width"], dynamic_viscosity=params["dynamic_viscosity"],
+        end_time=params["end_time"],
+        reached_time=series["time"][-1] if n else math.nan,
+        steps=max(n - 1, 0),
+        max_kinetic_energy=float(np.nanmax(ke)) if n else math.nan,
         # from the first step on (at t = 0 the bound is E(0) itself)
-        "max_energy_ratio": float(np.nanmax(ke[1:] / np.where(bound[1:] > 0, bound[1:], np.nan))) if n > 1
+        max_energy_ratio=float(np.nanmax(ke[1:] / np.where(bound[1:] > 0, bound[1:], np.nan))) if n > 1
         else math.nan,
-        "displaced_volume": displaced,
-        "volume_error": verr,
+        displaced_volume=displaced,
+        volume_error=verr,
         # an inverted mesh is not an accepted state (not in the series): its Jacobian is the failure's
-        "min_jacobian": _nanmin(list(series["min_ale_jacobian"]) + (
+        min_jacobian=_nanmin(list(series["min_ale_jacobian"]) + (
             [failure.value] if failure is not None and failure.limit == "ale_inversion" else [])),
-        "peak_displacement": float(np.nanmax(series["max_displacement"])) if n else math.nan,
-        "peak_speed": float(np.nanmax(series["max_speed"])) if n else math.nan,
-        "total_newton_iterations": int(its.sum()),
-        "mean_newton_iterations": float(its[1:].mean()) if n > 1 else math.nan,
-        "max_newton_iterations": int(its.max()) if n else 0,
-        "step_halvings": sum(a.halved for a in attempts),
-        "factorisations": pb.counters["factorisations"] if pb is not None else 0,
-        "wall_time": wall,
-        "wall_time_per_step": float(swall[1:].mean()) if n > 1 else math.nan,
-    }
-    if tuple(scalars) != SCALARS:
-        raise RuntimeError(f"case scalars {tuple(scalars)} differ from stability.dataset.SCALARS")
-    ds = xr.Dataset({k: ((), v) for k, v in scalars.items()} | data,
+        peak_displacement=float(np.nanmax(series["max_displacement"])) if n else math.nan,
+        peak_speed=float(np.nanmax(series["max_speed"])) if n else math.nan,
+        total_newton_iterations=int(its.sum()),
+        mean_newton_iterations=float(its[1:].mean()) if n > 1 else math.nan,
+        max_newton_iterations=int(its.max()) if n else 0,
+        step_halvings=sum(a.halved for a in attempts),
+        factorisations=pb.counters["factorisations"] if pb is not None else 0,
+        wall_time=wall,
+        wall_time_per_step=float(swall[1:].mean()) if n > 1 else math.nan,
+    )
+    ds = xr.Dataset({k: ((), v) for k, v in asdict(scalars).items()} | data,
                     coords={"step": np.arange(n), "time": ("step", np.asarray(series["time"], float))})
     ds = ds.assign_coords(case=case.name)
     annotate(ds)
@@ -240,7 +237,7 @@ def run_case(cfg: dict, case: Case, mesh_path=None, end: float | None = None) ->
                                      solver=f"{SCENES[setup['scene']]}; Newton + "
                                             f"{ccfg['solver']['linear_solver']}",
                                      processes=comm.size))
-    log.info("case %s: %s %s (%.1f s)", case.name, scalars["outcome"], diagnosis, wall)
+    log.info("case %s: %s %s (%.1f s)", case.name, scalars.outcome, diagnosis, wall)
     return ds
 
 

@@ -5,7 +5,7 @@ solves them in sequence, each with the engine's own physics blocks:
 
 1. **wall**: the ureter wall alone in the axisymmetric r-z formulation (exact for the wall of every
    model: the geometry and the load are axisymmetric), Mooney-Rivlin with inertia, travelling
-   Gaussian load (ureterfsi.calibration.WallModel); its inner- and outer-surface motion is recorded
+   Gaussian load (ureterfsi.scenes.wall_rz.WallModel); its inner- and outer-surface motion is recorded
    at every step. Neglected: the urine pressure on the inner wall, |p - p_ref| against the 5e4 Pa load
    (measured in the fluid step and stored as `one_way_max_wall_pressure_deviation`).
 2. **urine**: the fluid alone on the fluid part of the 3D mesh, ALE, with the recorded inner-wall
@@ -36,7 +36,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .. import tags
-from ..calibration import INNER, OUTER, WallModel
 from ..fields import oneway_parts
 from ..fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings, physics
 from ..fsi.operators import Operators
@@ -50,6 +49,7 @@ from ..config import wall_sections
 from ..metadata import write_netcdf
 from ..provenance import config_hash, provenance_attrs
 from ..scenes.ureter import materials, ureter_fluid_scene
+from ..scenes.wall_rz import WallModel
 from . import pipeline
 from .options import RunSpec, solver_options
 from .probes import N_LINE, UreterProbes
@@ -156,8 +156,8 @@ class _SurfaceRecorder(Observer):
             idx = model.surface_dofs(space, facet_tag)
             return idx[np.argsort(coords[idx, 1])]
 
-        self.iu, self.iv = nodes(self.U, xu, INNER), nodes(self.V, xv, INNER)
-        self.ou = nodes(self.U, xu, OUTER)
+        self.iu, self.iv = nodes(self.U, xu, tags.FLUID_URETER), nodes(self.V, xv, tags.FLUID_URETER)
+        self.ou = nodes(self.U, xu, tags.URETER_OUTER)
         self.z_inner, self.z_outer = xu[self.iu, 1], xu[self.ou, 1]
         assert np.allclose(self.z_inner, xv[self.iv, 1])
         self.rows = {k: [] for k in ("time", "iur", "iuz", "ivr", "ivz", "our")}
