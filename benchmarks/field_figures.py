@@ -21,27 +21,14 @@ from ureterfsi import tags  # noqa: E402
 from ureterfsi.config import load_config  # noqa: E402
 from ureterfsi.geometry import UreterGeometry  # noqa: E402
 from ureterfsi.mesh import build_mesh  # noqa: E402
+from ureterfsi.meshfile import read_msh  # noqa: E402
 from ureterfsi.plotting_fields import FieldSet, hole_flow_section, pressure_lines  # noqa: E402
 
 
 def urine_tets(msh: Path) -> tuple[np.ndarray, np.ndarray]:
     """(vertex coordinates, urine tetrahedra as vertex indices) of a gmsh mesh."""
-    import gmsh
-
-    gmsh.initialize()
-    try:
-        gmsh.open(str(msh))
-        node_tags, coords, _ = gmsh.model.mesh.getNodes()
-        index = np.full(int(node_tags.max()) + 1, -1)
-        index[node_tags] = np.arange(node_tags.size)
-        cells = []
-        for entity in gmsh.model.getEntitiesForPhysicalGroup(3, tags.FLUID):
-            for etype, _, nodes in zip(*gmsh.model.mesh.getElements(3, entity)):
-                n = gmsh.model.mesh.getElementProperties(etype)[3]
-                cells.append(index[np.asarray(nodes).reshape(-1, n)[:, :4]])
-        return coords.reshape(-1, 3), np.vstack(cells)
-    finally:
-        gmsh.finalize()
+    m = read_msh(msh)
+    return m.coords, m.elements(3, tags.FLUID)
 
 
 class SyntheticFields(FieldSet):

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ureterfsi import aggregate, plotting
+from ureterfsi import aggregate, plotting, tags
+from ureterfsi.meshfile import read_msh
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.metadata import VARIABLES as CF
@@ -292,7 +293,8 @@ def test_figure_domain(cfg, tmp_path, symmetry):
 def test_facet_regions_hole_channel_is_fluid(cfg, tmp_path):
     """In the mirror plane x = 0 the hole channels (stent radii, near a hole centre) are urine."""
     msh, info = _tiny_mesh(cfg, tmp_path, "quarter")
-    coords, cells, sym, dim = plotting._read_msh(msh)
+    m = read_msh(msh)
+    coords, cells, sym = m.coords, m.cells(), m.elements(2, tags.SYMMETRY_X)
     reg = plotting._facet_regions(cells, sym)
     assert (reg > 0).all()
     c = coords[sym].mean(axis=1)

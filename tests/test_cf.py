@@ -166,3 +166,30 @@ def test_postprocessing_imports_without_dolfinx():
             "import ureterfsi.metadata, ureterfsi.aggregate, ureterfsi.plotting, ureterfsi.gci\nprint('ok')")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
+
+
+def test_every_registry_table_gives_udunits_units_and_a_long_name():
+    """Every entry of the registry's tables (the templated ones too) has units UDUNITS parses and a long_name."""
+    import cf_units
+
+    from ureterfsi import designs
+
+    tables = {"VARIABLES": metadata.VARIABLES, "FIELD_VARIABLES": metadata.FIELD_VARIABLES,
+              "WALL_MOTION_VARIABLES": metadata.WALL_MOTION_VARIABLES,
+              "DESIGN_PARAMETERS": metadata.DESIGN_PARAMETERS,
+              "gci_variables": metadata.gci_variables(False, "fine", "medium", "coarse", ("monotone",)),
+              "ladder_variables": metadata.ladder_variables("reference", "default"),
+              "gci_quantity_variables": metadata.gci_quantity_variables("peak_outlet_flux",
+                                                                        *metadata.cf_meta("peak_outlet_flux"))}
+    for table_name, table in tables.items():
+        for name, (units, long_name) in table.items():
+            cf_units.Unit(units)          # raises on units UDUNITS cannot parse
+            assert isinstance(long_name, str) and long_name.strip(), (table_name, name)
+    assert metadata.gci_variables(True, "f", "m", "c", ())["h"][0] == "1"
+    assert metadata.ladder_variables("fc")["error"][1].endswith("'fc'")
+    # the design parameters take their units and long_name from the registry, one entry each
+    assert set(designs.PARAMETERS) == set(metadata.DESIGN_PARAMETERS)
+    for name, p in designs.PARAMETERS.items():
+        assert (p.units, p.long_name) == metadata.DESIGN_PARAMETERS[name]
+    with pytest.raises(KeyError, match="'nope'"):
+        metadata.cf_meta("nope", metadata.FIELD_VARIABLES)

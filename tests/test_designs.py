@@ -14,6 +14,7 @@ import yaml
 
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.designs import point_id, studies
+from ureterfsi.meshfile import read_msh
 from test_workflow_e2e import e2e_config, job_counts, ok, snakemake
 
 REPO = Path(__file__).resolve().parent.parent
@@ -240,17 +241,9 @@ def test_stricture_changes_wall_and_mesh():
 
 def _lumen_wall_nodes(msh: Path) -> np.ndarray:
     """(r, z) of the mesh nodes on the fluid-ureter interface."""
-    import gmsh
     from ureterfsi import tags
 
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(msh))
-        _, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(2, tags.FLUID_URETER)
-    finally:
-        gmsh.finalize()
-    x = np.asarray(xyz).reshape(-1, 3)
+    x = read_msh(msh).nodes(2, tags.FLUID_URETER)
     return np.c_[np.hypot(x[:, 0], x[:, 1]), x[:, 2]]
 
 

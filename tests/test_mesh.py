@@ -12,6 +12,7 @@ from ureterfsi import tags
 from ureterfsi.config import load_config
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.mesh import build_mesh, load_mesh
+from ureterfsi.meshfile import read_msh
 
 CASES = [("1", "quarter"), ("2", "quarter"), ("3", "quarter"), ("4", "quarter"), ("4", "half"), ("4", "full"),
          ("1", "axisymmetric")]
@@ -47,6 +48,46 @@ def _cell_tag_array(mesh, ct):
     out = np.zeros(n, dtype=np.int32)
     out[ct.indices] = ct.values
     return out
+
+
+@pytest.mark.parametrize("model,symmetry", [("1", "axisymmetric"), ("3", "quarter")])
+def test_read_msh_agrees_with_gmsh(built, tmp_path, model, symmetry):
+    """ureterfsi.meshfile.read_msh: every physical group's nodes, simplices and name as gmsh's own API gives
+    them, the counts of the mesh's sidecar; a truncated file is refused."""
+    import gmsh
+
+    from ureterfsi.checked_io import BadFile
+
+    msh, info, _ = built(model, symmetry)
+    m = read_msh(msh)
+    assert m.dim == (2 if symmetry == "axisymmetric" else 3)
+    assert sum(len(c) for c in m.cells().values()) == info["cells_total"]
+    assert len(np.unique(np.concatenate([c.ravel() for c in m.cells().values()]))) == info["nodes"]
+    assert {tags.FACET_NAMES[t]: len(m.elements(m.dim - 1, t)) for (d, t) in m.groups if d == m.dim - 1} \
+        == info["facet_tags"]
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.merge(str(msh))
+        groups = gmsh.model.getPhysicalGroups()
+        assert sorted(m.groups) == sorted(groups)
+        for d, t in groups:
+            node_tags, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(d, t)
+            order = np.argsort(node_tags)
+            np.testing.assert_array_equal(m.nodes(d, t), np.asarray(xyz).reshape(-1, 3)[order])
+            n_elements = sum(len(e) for ent in gmsh.model.getEntitiesForPhysicalGroup(d, t)
+                             for e in gmsh.model.mesh.getElements(d, ent)[1])
+            assert len(m.elements(d, t)) == n_elements and m.names[d, t] == gmsh.model.getPhysicalName(d, t)
+        some = gmsh.model.mesh.getNodes()[0][::97]
+        np.testing.assert_array_equal(m.coords[some.astype(np.int64) - 1],
+                                      np.array([gmsh.model.mesh.getNode(int(n))[0] for n in some]))
+    finally:
+        gmsh.finalize()
+    assert m.elements(2, 999).shape == (0, 3)
+    cut = tmp_path / "cut.msh"
+    cut.write_bytes(msh.read_bytes()[: msh.stat().st_size // 2])
+    with pytest.raises(BadFile, match="truncated"):
+        read_msh(cut)
 
 
 @pytest.mark.parametrize("model,symmetry", CASES)
@@ -228,16 +269,7 @@ def test_zero_stricture_gives_todays_mesh(mini, tmp_path, model, symmetry):
 
 def _interface_nodes(msh, tag: int, dim: int) -> np.ndarray:
     """(r, z) of the nodes of a facet group (r-z section: r = x, z = y)."""
-    import gmsh
-
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(msh))
-        _, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(dim - 1, tag)
-    finally:
-        gmsh.finalize()
-    x = np.asarray(xyz).reshape(-1, 3)
+    x = read_msh(msh).nodes(dim - 1, tag)
     return np.c_[x[:, 0], x[:, 1]] if dim == 2 else np.c_[np.hypot(x[:, 0], x[:, 1]), x[:, 2]]
 
 
@@ -300,19 +332,6 @@ def test_aligned_coaxial_gives_todays_mesh(mini, tmp_path):
     assert (info["cells_total"], info["nodes"], digest) == UNSTRICTURED["3", "quarter"]
 
 
-def _stent_nodes(msh) -> np.ndarray:
-    import gmsh
-
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(msh))
-        _, xyz = gmsh.model.mesh.getNodesForPhysicalGroup(3, tags.STENT)
-    finally:
-        gmsh.finalize()
-    return np.asarray(xyz).reshape(-1, 3)
-
-
 @pytest.mark.parametrize("offset,symmetry", [(0.0, "quarter"), (0.001, "half")])
 def test_rotated_pairs_mesh(mini, tmp_path, offset, symmetry):
     """rotated_90: pairs on y, x, y (model 2, 3 pairs), found in the mesh's hole channels at their positions. Quarter:
@@ -336,7 +355,7 @@ def test_rotated_pairs_mesh(mini, tmp_path, offset, symmetry):
         assert hi == pytest.approx(a, rel=1e-6) and lo == pytest.approx(0.0 if cut else -a, abs=1e-9), c
     for name, m in info["subdomain_measure"].items():
         assert abs(m["rel_error"]) < 5e-3, (name, m)
-    x = _stent_nodes(tmp_path / "m.msh")     # the stent tube about its axis (offset, 0): r_i <= rho <= r_o
+    x = read_msh(tmp_path / "m.msh").nodes(3, tags.STENT)     # the stent tube about its axis (offset, 0): r_i <= rho <= r_o
     rho = np.hypot(x[:, 0] - offset, x[:, 1])
     assert rho.max() == pytest.approx(geom.stent_outer_radius, rel=1e-5)     # OCC places nodes within ~1e-9 m
     assert rho.min() == pytest.approx(geom.stent_inner_radius, rel=1e-5) and x[:, 1].min() == pytest.approx(0, abs=1e-12)

@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .checked_io import RUN_FILE, BadFile, Contract, open_netcdf
-from .metadata import annotate, write_netcdf
+from .metadata import annotate, at_time, cf_attrs, write_netcdf
 from .provenance import provenance_attrs
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
@@ -186,7 +186,7 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
     ds = annotate(xr.Dataset(data_vars, coords=coords))
     ds["outlet_hole_z"] = xr.DataArray(
         [float(runs[m].attrs.get("outlet_hole_z", np.nan)) for m in models], dims="model",
-        attrs={"units": "m", "long_name": "axial position of the outlet-most side hole (Figs. 6-9)"})
+        attrs=cf_attrs("outlet_hole_z"))
 
     attrs = {}
     for m in models:
@@ -261,7 +261,7 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
     ds["line_max_difference_to_finest"] = np.abs(ds["stent_von_mises_line"]
                                                  - ds["stent_von_mises_line"].isel(level=-1)).max("z")
     ds = annotate(ds)
-    ds["stent_von_mises_line"].attrs["long_name"] += f" at t = {time:g} s"
+    ds["stent_von_mises_line"].attrs["long_name"] = at_time(ds["stent_von_mises_line"].attrs["long_name"], time)
     attrs = {}
     for lv in levels:
         attrs.update(_run_attrs(lv, runs[lv].attrs))

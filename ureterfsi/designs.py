@@ -44,6 +44,7 @@ from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
 from .config.validation import validate_config
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
+from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
@@ -54,29 +55,27 @@ RESERVED_NAMES = ("meshes", "wall_motion")   # directories of results/designs/
 
 @dataclass(frozen=True)
 class Parameter:
-    units: str
-    long_name: str
+    name: str
     part: str                          # "stent": re-mesh + urine solve; "wall": wall motion + urine solve;
                                        # "solve": the solve alone (the stent material)
 
+    @property
+    def units(self) -> str:
+        return cf_meta(self.name, DESIGN_PARAMETERS)[0]
 
-PARAMETERS = {
-    "hole_diameter": Parameter("m", "side-hole diameter", "stent"),
-    "hole_pair_spacing": Parameter("m", "distance between side-hole pairs (count by the Table 1 rule)", "stent"),
-    "stent_outer_diameter": Parameter("m", "stent outer diameter", "stent"),
-    "stent_wall_thickness": Parameter("m", "stent wall thickness", "stent"),
-    "stent_youngs_modulus": Parameter("Pa", "Young's modulus of the stent", "solve"),
-    "wall_stiffness_scale": Parameter("1", "common factor on the five Mooney-Rivlin coefficients of the wall", "wall"),
-    "peak_traction": Parameter("Pa", "peak traction of the peristaltic load", "wall"),
-    "pulse_speed": Parameter("m s-1", "speed of the peristaltic pulse", "wall"),
-    # the obstruction (geometry.stricture_*): a new wall motion and a new mesh
-    "stricture_fraction": Parameter("1", "fraction by which a stricture narrows the lumen radius at its centre", "wall"),
-    "stricture_length": Parameter("m", "axial length of the stricture", "wall"),
-    "stricture_position": Parameter("m", "axial position of the stricture centre", "wall"),
-    # geometry.hole_arrangement (0 = aligned, 90 = rotated_90) and geometry.stent_offset: a new mesh
-    "hole_pair_rotation": Parameter("degree", "angle between the axes of successive side-hole pairs", "stent"),
-    "stent_eccentricity": Parameter("m", "offset of the stent axis from the ureter axis, along x", "stent"),
-}
+    @property
+    def long_name(self) -> str:
+        return cf_meta(self.name, DESIGN_PARAMETERS)[1]
+
+
+# the parameters (units and long_name: ureterfsi.metadata.DESIGN_PARAMETERS) and what each re-runs;
+# stricture_* (geometry.stricture_*): a new wall motion and a new mesh; hole_pair_rotation
+# (geometry.hole_arrangement, 0 = aligned, 90 = rotated_90) and stent_eccentricity (geometry.stent_offset): a new mesh
+PARAMETERS = {name: Parameter(name, part) for name, part in (
+    ("hole_diameter", "stent"), ("hole_pair_spacing", "stent"), ("stent_outer_diameter", "stent"),
+    ("stent_wall_thickness", "stent"), ("stent_youngs_modulus", "solve"), ("wall_stiffness_scale", "wall"),
+    ("peak_traction", "wall"), ("pulse_speed", "wall"), ("stricture_fraction", "wall"), ("stricture_length", "wall"),
+    ("stricture_position", "wall"), ("hole_pair_rotation", "stent"), ("stent_eccentricity", "stent"))}
 ARRANGEMENT = {0.0: "aligned", 90.0: "rotated_90"}     # hole_pair_rotation -> geometry.hole_arrangement
 STRICTURE = ("stricture_fraction", "stricture_length", "stricture_position")
 MOONEY_RIVLIN = ("c10", "c01", "c20", "c02", "c11")
@@ -488,7 +487,6 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     import xarray as xr
 
     from .provenance import provenance_attrs
-    from .metadata import VARIABLES
 
     st = studies(cfg)[name]
     runs = {}
@@ -527,7 +525,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
               "hole_axis": (("design", "hole"), hole_axis)}
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
     ds = xr.Dataset(vars_, coords=coords)
-    meta = VARIABLES | {q: (PARAMETERS[q].units, PARAMETERS[q].long_name) for q in st.parameters}
+    meta = VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters}
     if st.kind == "full_factorial":
         if len(st.parameters) == 1:   # one parameter: a plain index, nothing to unstack
             ds = ds.swap_dims(design=st.parameters[0]).drop_vars("design")

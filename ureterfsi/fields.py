@@ -33,16 +33,9 @@ from dolfinx import log as dlog
 
 from . import tags
 from .fsi import Observer
+from .metadata import FIELD_VARIABLES, cf_meta
 
 FORMATS = ("xdmf",)
-# quantity -> (units, long_name)
-QUANTITIES = {
-    "velocity": ("m s-1", "urine velocity (solid velocity in the ureter wall and the stent)"),
-    "pressure": ("Pa", "urine pressure"),
-    "displacement": ("m", "displacement: solid in the ureter wall and the stent, ALE mesh displacement in the urine"),
-    "von_mises": ("Pa", "stent von Mises stress, cell mean"),
-}
-STATIC = {"subdomain": ("1", "cell tag of the subdomain (ureterfsi.tags: urine 1, ureter wall 2, stent 3)")}
 XI = "http://www.w3.org/2001/XInclude"
 
 
@@ -229,8 +222,9 @@ class FieldWriter(Observer):
                 "configuration": "reference (ALE) mesh; Warp By Vector with `displacement` gives the current one",
                 "parts": {p.name: {"file": f"{p.name}.xdmf", "quantities": list(p.fields) + list(p.static)}
                           for p in self.parts},
-                "units": {q: QUANTITIES[q][0] for p in self.parts for q in p.fields} | {"subdomain": "1", "time": "s"},
-                "long_names": {q: QUANTITIES[q][1] for p in self.parts for q in p.fields},
+                "units": {q: cf_meta(q, FIELD_VARIABLES)[0] for p in self.parts for q in p.fields}
+                | {q: cf_meta(q, FIELD_VARIABLES)[0] for q in ("subdomain", "time")},
+                "long_names": {q: cf_meta(q, FIELD_VARIABLES)[1] for p in self.parts for q in p.fields},
                 "steps": [s for s, _ in sorted(self.snapshots)],
                 "times": [t for _, t in sorted(self.snapshots)],
                 "size_bytes": size,
@@ -270,7 +264,7 @@ class FieldWriter(Observer):
             grid.extend(topo_geom)
             ET.SubElement(grid, "Time", {"Value": repr(t)})
             for attr in static + list(snap.iter("Attribute")):
-                units, long_name = (QUANTITIES | STATIC)[attr.get("Name")]
+                units, long_name = cf_meta(attr.get("Name"), FIELD_VARIABLES)
                 a = ET.SubElement(grid, "Attribute", dict(attr.attrib))
                 ET.SubElement(a, "Information", {"Name": "units", "Value": units})
                 ET.SubElement(a, "Information", {"Name": "long_name", "Value": long_name})

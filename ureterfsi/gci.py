@@ -68,6 +68,7 @@ import numpy as np
 import xarray as xr
 
 from .checked_io import Contract, read_json
+from .metadata import at_z, attach, cf_attrs, cf_meta, gci_quantity_variables, gci_variables
 from .provenance import atomic_path, provenance_attrs
 
 # what the readers of a GCI dataset (table_gci) rely on
@@ -314,9 +315,9 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
             if not z.min() - 1e-12 <= zp <= z.max() + 1e-12:
                 raise ValueError(f"probe point z = {zp} m outside the probe line [{z.min()}, {z.max()}] m")
             names.append(_quantity_name(zp))
-            units.append(line.attrs.get("units", "Pa"))
-            long_names.append(f"{line.attrs.get('long_name', 'stent von Mises stress on the probe line')}, "
-                              f"at z = {zp * 1e3:g} mm")
+            line_units, line_name = cf_meta("stent_von_mises_line")
+            units.append(line.attrs.get("units", line_units))
+            long_names.append(at_z(line.attrs.get("long_name", line_name), zp))
             values.append(np.array([np.interp(zp, z, line.isel(level=i).values) for i in range(n_level)]))
             probe_z.append(zp)
     if not names:
@@ -328,27 +329,7 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
     def per_q(attr):
         return np.array([getattr(r, attr) for r in results], dtype=float)
 
-    h_units = "1" if measure is None else "m"
-    meta = {
-        "cells": ("1", "number of cells of the mesh"),
-        "h": (h_units, "representative cell size (V/N)^(1/d)" + (", with V = 1 (relative)" if measure is None
-                                                                  else "")),
-        "r21": ("1", f"refinement ratio h2/h1 ({medium}/{fine})"),
-        "r32": ("1", f"refinement ratio h3/h2 ({coarse}/{medium})"),
-        "apparent_order": ("1", "apparent order p of Celik et al. 2008 (NaN: undefined, see note)"),
-        "e_a21": ("1", "approximate relative error |(phi1 - phi2)/phi1| (fraction)"),
-        "e_ext21": ("1", "extrapolated relative error |(phi_ext21 - phi1)/phi_ext21| (fraction)"),
-        "gci_fine21": ("1", "fine-grid convergence index GCI_fine21 = Fs e_a21/(r21^p - 1) (fraction)"),
-        "gci32": ("1", "coarse-pair convergence index GCI32 = Fs e_a32/(r32^p - 1) (fraction)"),
-        "asymptotic_ratio": ("1", "GCI32 / (r21^p GCI_fine21), ~1 in the asymptotic range"),
-        "convergence_ratio": ("1", "R = eps21/eps32 = (phi2 - phi1)/(phi3 - phi2); monotone for "
-                                  "0 < R < ln r21/ln r32, oscillatory for R < 0"),
-        "diagnosis": ("1", "convergence diagnosis: " + ", ".join(DIAGNOSES)),
-        "note": ("1", "explanation of NaN or non-monotone results"),
-        "probe_z": ("m", "axial position of the probe-line point (NaN for whole-run scalars)"),
-        "quantity": ("1", "quantity of the GCI"),
-        "level": ("1", "mesh level (config mesh.levels)"),
-    }
+    meta = gci_variables(measure is None, fine, medium, coarse, DIAGNOSES)
     ds = xr.Dataset(
         {"cells": ("level", cells),
          "h": ("level", np.asarray(h, dtype=float)),
@@ -365,14 +346,11 @@ def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCA
          "probe_z": ("quantity", np.array(probe_z, dtype=float))},
         coords={"quantity": ("quantity", np.array(names, dtype=object)),
                 "level": ("level", np.array(levels, dtype=object))})
-    for name in ds.variables:
-        u, ln = meta[str(name)]
-        ds[name].attrs.update(units=u, long_name=ln)
+    attach(ds, meta)
     for q, u, ln, val, r in zip(names, units, long_names, values, results):
-        ds[f"value_{q}"] = xr.DataArray(np.asarray(val), dims="level",
-                                        attrs={"units": u, "long_name": f"{ln}, on each mesh level"})
-        ds[f"extrapolated_value_{q}"] = xr.DataArray(r.phi_ext21, attrs={
-            "units": u, "long_name": f"{ln}, Richardson-extrapolated value phi_ext21"})
+        qmeta = gci_quantity_variables(q, u, ln)
+        ds[f"value_{q}"] = xr.DataArray(np.asarray(val), dims="level", attrs=cf_attrs(f"value_{q}", qmeta))
+        ds[f"extrapolated_value_{q}"] = xr.DataArray(r.phi_ext21, attrs=cf_attrs(f"extrapolated_value_{q}", qmeta))
 
     attrs = {}
     for k, v in conv.attrs.items():

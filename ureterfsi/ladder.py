@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .metadata import attach, ladder_variables
 from .provenance import provenance_attrs
 
 SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "stent_max_von_mises",
@@ -109,51 +110,33 @@ def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     pairwise = np.array([[[relative_error(runs[a], runs[r], q) for q in quantities] for a in names] for r in names])
     error = pairwise[:, names.index(lad["reference"]), :]
     ds = xr.Dataset(
-        {"error": (("rung", "quantity"), error,
-                   {"units": "1", "long_name": f"relative max-norm error against the reference rung "
-                                               f"'{lad['reference']}'"}),
-         "pairwise_error": (("rung", "against", "quantity"), pairwise,
-                            {"units": "1", "long_name": "relative max-norm error of a rung against another "
-                                                        "(e.g. the quarter model against the full one)"}),
-         "wall_time": ("rung", [float(runs[r].attrs["wall_time_s"]) for r in names],
-                       {"units": "s", "long_name": "wall-clock time of the run"}),
-         "peak_memory": ("rung", [float(runs[r].attrs.get("peak_memory_mib", np.nan)) for r in names],
-                         {"units": "1048576 byte", "long_name": "peak resident memory of the run (MiB)"}),
-         "cells": ("rung", [int(runs[r].attrs["cells"]) for r in names],
-                   {"units": "1", "long_name": "cells of the mesh"}),
-         "dofs": ("rung", [int(runs[r].attrs["dofs"]) for r in names],
-                  {"units": "1", "long_name": "unknowns of the (fluid or coupled) Newton system"}),
-         "time_step": ("rung", [float(lad["rungs"][r]["dt"]) for r in names],
-                       {"units": "s", "long_name": "time step"}),
-         "fidelity": ("rung", [lad["rungs"][r]["fidelity"] for r in names],
-                      {"units": "1", "long_name": "coupling of the rung"}),
-         "symmetry": ("rung", [lad["rungs"][r]["symmetry"] for r in names],
-                      {"units": "1", "long_name": "mesh symmetry of the rung"}),
-         "level": ("rung", [lad["rungs"][r]["level"] for r in names],
-                   {"units": "1", "long_name": "mesh level of the rung"})},
-        coords={"rung": ("rung", names, {"units": "1", "long_name": "rung of the fidelity ladder"}),
-                "against": ("against", names, {"units": "1", "long_name": "rung an error is measured against"}),
-                "quantity": ("quantity", quantities, {"units": "1", "long_name": "quantity of interest"})})
+        {"error": (("rung", "quantity"), error),
+         "pairwise_error": (("rung", "against", "quantity"), pairwise),
+         "wall_time": ("rung", [float(runs[r].attrs["wall_time_s"]) for r in names]),
+         "peak_memory": ("rung", [float(runs[r].attrs.get("peak_memory_mib", np.nan)) for r in names]),
+         "cells": ("rung", [int(runs[r].attrs["cells"]) for r in names]),
+         "dofs": ("rung", [int(runs[r].attrs["dofs"]) for r in names]),
+         "time_step": ("rung", [float(lad["rungs"][r]["dt"]) for r in names]),
+         "fidelity": ("rung", [lad["rungs"][r]["fidelity"] for r in names]),
+         "symmetry": ("rung", [lad["rungs"][r]["symmetry"] for r in names]),
+         "level": ("rung", [lad["rungs"][r]["level"] for r in names])},
+        coords={"rung": ("rung", names), "against": ("against", names), "quantity": ("quantity", quantities)})
     scenes = cfg.get("scenes", {})
+    default = None
     if scenes:
         chosen = select_rungs(ds["error"], ds["wall_time"], scenes)
         sc = list(scenes)
-        ds = ds.assign_coords(scene=("scene", sc, {"units": "1", "long_name": "figure (scene)"}))
-        ds["tolerance"] = ("scene", [float(scenes[s]["tolerance"]) for s in sc],
-                           {"units": "1", "long_name": "tolerated relative error of the scene"})
-        ds["chosen_rung"] = ("scene", [chosen[s][0] for s in sc],
-                             {"units": "1", "long_name": "cheapest rung within the scene's tolerance"})
-        ds["chosen_error"] = ("scene", [chosen[s][1] for s in sc],
-                              {"units": "1", "long_name": "largest error of the chosen rung over the scene's quantities"})
+        ds = ds.assign_coords(scene=("scene", sc))
+        ds["tolerance"] = ("scene", [float(scenes[s]["tolerance"]) for s in sc])
+        ds["chosen_rung"] = ("scene", [chosen[s][0] for s in sc])
+        ds["chosen_error"] = ("scene", [chosen[s][1] for s in sc])
         default = default_rung(cfg)
         if default is not None and default in names:
             ds.attrs["default_rung"] = default
             ds["default_error"] = ("scene", [float(ds["error"].sel(rung=default, quantity=[
-                q for q in scenes[s]["quantities"] if q in quantities]).max(skipna=True)) for s in sc],
-                {"units": "1", "long_name": f"largest error of the default runs' rung '{default}' over the "
-                                            f"scene's quantities"})
-        ds["recorded_error"] = ("scene", [float(scenes[s].get("measured_error", np.nan)) for s in sc],
-                                {"units": "1", "long_name": "the scene's measured_error recorded in the configuration"})
+                q for q in scenes[s]["quantities"] if q in quantities]).max(skipna=True)) for s in sc])
+        ds["recorded_error"] = ("scene", [float(scenes[s].get("measured_error", np.nan)) for s in sc])
+    attach(ds, ladder_variables(lad["reference"], default))
     ds.attrs.update(provenance_attrs(cfg, model=lad["model"], reference=lad["reference"], window_s=lad["end"]))
     for r in names:
         ds.attrs[f"run_{r}_source"] = Path(paths[r]).name

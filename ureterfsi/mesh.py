@@ -22,6 +22,7 @@ from ureterfsi import tags
 from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
                                 lumen_area, subdomain_volumes)
 from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
+from ureterfsi.meshfile import group_elements, read_msh
 from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
 
 # choice: away from a refined region the element size grows linearly to the bulk size over
@@ -285,15 +286,6 @@ def _optimize(dim: int) -> str:
     return "gmsh+relocate3d"
 
 
-def _elements(dim: int, phys: int):
-    """Node-tag connectivity (n, dim+1) of the simplices of one physical group."""
-    conn = []
-    for e in gmsh.model.getEntitiesForPhysicalGroup(dim, phys):
-        types, _, nodes = gmsh.model.mesh.getElements(dim, e)
-        conn += [np.asarray(n).reshape(-1, dim + 1) for n in nodes]
-    return np.vstack(conn) if conn else np.zeros((0, dim + 1), dtype=np.uint64)
-
-
 def _measure(conn: np.ndarray, coords: np.ndarray) -> float:
     """Total volume (3D) or area (2D) of simplices."""
     p = coords[conn - 1][:, :, :conn.shape[1] - 1]
@@ -415,7 +407,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
         node_tags, xyz, _ = gmsh.model.mesh.getNodes()
         coords = np.zeros((int(node_tags.max()), 3))
         coords[node_tags.astype(np.int64) - 1] = xyz.reshape(-1, 3)
-        cells = {tags.CELL_NAMES[t]: _elements(dim, t) for t in regions}
+        cells = {tags.CELL_NAMES[t]: group_elements(dim, t) for t in regions}
         names = ("fluid", "ureter", "stent")
         if dim == 3:
             analytic = subdomain_volumes(geom, sm, SYMMETRY_FRACTION[symmetry])
@@ -424,7 +416,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
                         "ureter": (geom.ureter_outer_radius - geom.ureter_inner_radius) * geom.length,
                         "stent": 0.0}
         measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}
-        stent_facets = _elements(2, tags.FLUID_STENT) if tags.FLUID_STENT in facets else None
+        stent_facets = group_elements(2, tags.FLUID_STENT) if tags.FLUID_STENT in facets else None
         channels = hole_channels(coords, stent_facets, geom.stent_offset) if stent_facets is not None else []
         info = {
             "model": str(model), "level": level, "symmetry": symmetry, "size_factor": f,
@@ -443,7 +435,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             "hole_channels_found": len(channels),
             "hole_channels": channels,
             **(hole_resolution(coords, stent_facets, 2 * geom.hole_radius, geom.stent_offset) if channels else {}),
-            "facet_tags": {tags.FACET_NAMES[t]: int(len(_elements(dim - 1, t))) for t in sorted(facets)},
+            "facet_tags": {tags.FACET_NAMES[t]: int(len(group_elements(dim - 1, t))) for t in sorted(facets)},
             "optimizer": optimizer,
             "mesh_wall_time_s": wall_time,
             "gmsh_version": gmsh.__version__,
@@ -519,18 +511,9 @@ def mirror_mesh(src, dst, symmetry: str) -> dict:
     planes = {"half": [(0, tags.SYMMETRY_X)], "quarter": [(0, tags.SYMMETRY_X), (1, tags.SYMMETRY_Y)]}
     if symmetry not in planes:
         raise ValueError(f"mirror_mesh: symmetry must be 'half' or 'quarter', got {symmetry!r}")
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.merge(str(src))
-        node_tags, xyz, _ = gmsh.model.mesh.getNodes()
-        coords = np.zeros((int(node_tags.max()), 3))
-        coords[node_tags.astype(np.int64) - 1] = xyz.reshape(-1, 3)
-        groups = {(d, t): _elements(d, t).astype(np.int64) for d, t in gmsh.model.getPhysicalGroups()}
-        names = {(d, t): gmsh.model.getPhysicalName(d, t) for d, t in groups}
-    finally:
-        gmsh.finalize()
-    dim = max(d for d, _ in groups)
+    src_mesh = read_msh(src)
+    coords, names, dim = src_mesh.coords, src_mesh.names, src_mesh.dim
+    groups = {k: c + 1 for k, c in src_mesh.groups.items()}     # node tags
     if dim != 3:
         raise ValueError(f"mirror_mesh: {src} is not a 3D mesh")
     if symmetry == "half" and (dim - 1, tags.SYMMETRY_X) not in groups:

@@ -1,5 +1,7 @@
-"""Metadata of every dataset the project writes: one table of variables (UDUNITS units, long_name, CF
-standard_name), the netCDF encoding CF 1.8 accepts, the global attributes, and the atomic netCDF write.
+"""Metadata of every dataset the project writes: the tables of variables (UDUNITS units, long_name, CF
+standard_name) of the run and study files (VARIABLES) and of the field files, the wall motion, the design
+parameters, the GCI and the ladder (each in its own words, templated entries built by a function here), the
+netCDF encoding CF 1.8 accepts, the global attributes, and the atomic netCDF write.
 
 Imports no dolfinx, PETSc or MPI: post-processing and figures use it without the solver stack.
 CF 1.8: coordinate variables carry no `_FillValue` (§2.5.1); integers are written as int32 (§2.2 has no
@@ -105,6 +107,7 @@ VARIABLES = {
     "sobol_first_order_conf": ("1", "half-width of the 95 % bootstrap confidence interval of sobol_first_order"),
     "sobol_total": ("1", "total Sobol' index ST = E[V(y | x_~j)] / V(y) (SALib.analyze.sobol)"),
     "sobol_total_conf": ("1", "half-width of the 95 % bootstrap confidence interval of sobol_total"),
+    "outlet_hole_z": ("m", "axial position of the outlet-most side hole (Figs. 6-9)"),
     "line_max_difference_to_finest": ("Pa", "maximum over z of |stent_von_mises_line - that of the finest level|"),
     # the stability matrix (ureterfsi.stability): per recorded state of a case
     "dt": ("s", "length of the accepted time step (0 for the initial state)"),
@@ -172,23 +175,141 @@ VARIABLES = {
     "wall_time_per_step": ("s", "mean wall-clock time per accepted step"),
 }
 
+# the tables of the other datasets, each in its own words (a name may mean another thing elsewhere)
+# XDMF field attributes and fields.json (ureterfsi.fields): quantity -> (units, long_name)
+FIELD_VARIABLES = {
+    "velocity": ("m s-1", "urine velocity (solid velocity in the ureter wall and the stent)"),
+    "pressure": ("Pa", "urine pressure"),
+    "displacement": ("m", "displacement: solid in the ureter wall and the stent, ALE mesh displacement in the urine"),
+    "von_mises": ("Pa", "stent von Mises stress, cell mean"),
+    "subdomain": ("1", "cell tag of the subdomain (ureterfsi.tags: urine 1, ureter wall 2, stent 3)"),
+    "time": ("s", "simulated time of the snapshot"),
+}
+# the one-way rung's wall-motion file (ureterfsi.study.oneway.WallHistory)
+WALL_MOTION_VARIABLES = {
+    "inner_radial_displacement": ("m", "radial displacement of the inner wall surface"),
+    "inner_axial_displacement": ("m", "axial displacement of the inner wall surface"),
+    "inner_radial_velocity": ("m s-1", "radial velocity of the inner wall surface"),
+    "inner_axial_velocity": ("m s-1", "axial velocity of the inner wall surface"),
+    "outer_radial_displacement": ("m", "radial displacement of the outer wall surface"),
+    "time": ("s", "time"),
+    "z_inner": ("m", "axial position on the inner wall surface (reference)"),
+    "z_outer": ("m", "axial position on the outer wall surface (reference)"),
+}
+# design-study parameters (ureterfsi.designs.PARAMETERS), SI units
+DESIGN_PARAMETERS = {
+    "hole_diameter": ("m", "side-hole diameter"),
+    "hole_pair_spacing": ("m", "distance between side-hole pairs (count by the Table 1 rule)"),
+    "stent_outer_diameter": ("m", "stent outer diameter"),
+    "stent_wall_thickness": ("m", "stent wall thickness"),
+    "stent_youngs_modulus": ("Pa", "Young's modulus of the stent"),
+    "wall_stiffness_scale": ("1", "common factor on the five Mooney-Rivlin coefficients of the wall"),
+    "peak_traction": ("Pa", "peak traction of the peristaltic load"),
+    "pulse_speed": ("m s-1", "speed of the peristaltic pulse"),
+    "stricture_fraction": ("1", "fraction by which a stricture narrows the lumen radius at its centre"),
+    "stricture_length": ("m", "axial length of the stricture"),
+    "stricture_position": ("m", "axial position of the stricture centre"),
+    "hole_pair_rotation": ("degree", "angle between the axes of successive side-hole pairs"),
+    "stent_eccentricity": ("m", "offset of the stent axis from the ureter axis, along x"),
+}
+# the GCI dataset (ureterfsi.gci); the templated entries come from gci_variables
+GCI_VARIABLES = {
+    "cells": VARIABLES["cells"],
+    "apparent_order": ("1", "apparent order p of Celik et al. 2008 (NaN: undefined, see note)"),
+    "e_a21": ("1", "approximate relative error |(phi1 - phi2)/phi1| (fraction)"),
+    "e_ext21": ("1", "extrapolated relative error |(phi_ext21 - phi1)/phi_ext21| (fraction)"),
+    "gci_fine21": ("1", "fine-grid convergence index GCI_fine21 = Fs e_a21/(r21^p - 1) (fraction)"),
+    "gci32": ("1", "coarse-pair convergence index GCI32 = Fs e_a32/(r32^p - 1) (fraction)"),
+    "asymptotic_ratio": ("1", "GCI32 / (r21^p GCI_fine21), ~1 in the asymptotic range"),
+    "convergence_ratio": ("1", "R = eps21/eps32 = (phi2 - phi1)/(phi3 - phi2); monotone for "
+                               "0 < R < ln r21/ln r32, oscillatory for R < 0"),
+    "note": ("1", "explanation of NaN or non-monotone results"),
+    "probe_z": ("m", "axial position of the probe-line point (NaN for whole-run scalars)"),
+    "quantity": ("1", "quantity of the GCI"),
+    "level": VARIABLES["level"],
+}
+# the fidelity-ladder dataset (ureterfsi.ladder); the templated entries come from ladder_variables
+LADDER_VARIABLES = {
+    "pairwise_error": ("1", "relative max-norm error of a rung against another (e.g. the quarter model against "
+                            "the full one)"),
+    "wall_time": VARIABLES["wall_time"],
+    "peak_memory": ("1048576 byte", "peak resident memory of the run (MiB)"),
+    "cells": ("1", "cells of the mesh"),
+    "dofs": ("1", "unknowns of the (fluid or coupled) Newton system"),
+    "time_step": ("s", "time step"),
+    "fidelity": ("1", "coupling of the rung"),
+    "symmetry": ("1", "mesh symmetry of the rung"),
+    "level": ("1", "mesh level of the rung"),
+    "rung": ("1", "rung of the fidelity ladder"),
+    "against": ("1", "rung an error is measured against"),
+    "quantity": ("1", "quantity of interest"),
+    "scene": ("1", "figure (scene)"),
+    "tolerance": ("1", "tolerated relative error of the scene"),
+    "chosen_rung": ("1", "cheapest rung within the scene's tolerance"),
+    "chosen_error": ("1", "largest error of the chosen rung over the scene's quantities"),
+    "recorded_error": ("1", "the scene's measured_error recorded in the configuration"),
+}
+
+
+def gci_variables(relative: bool, fine: str, medium: str, coarse: str, diagnoses) -> dict:
+    """GCI_VARIABLES with the entries that name the levels, the measure of h and the diagnoses."""
+    return GCI_VARIABLES | {
+        "h": ("1" if relative else "m",
+              "representative cell size (V/N)^(1/d)" + (", with V = 1 (relative)" if relative else "")),
+        "r21": ("1", f"refinement ratio h2/h1 ({medium}/{fine})"),
+        "r32": ("1", f"refinement ratio h3/h2 ({coarse}/{medium})"),
+        "diagnosis": ("1", "convergence diagnosis: " + ", ".join(diagnoses)),
+    }
+
+
+def gci_quantity_variables(quantity: str, units: str, long_name: str) -> dict:
+    """(units, long_name) of a GCI quantity's per-level values and its Richardson-extrapolated value."""
+    return {f"value_{quantity}": (units, f"{long_name}, on each mesh level"),
+            f"extrapolated_value_{quantity}": (units, f"{long_name}, Richardson-extrapolated value phi_ext21")}
+
+
+def ladder_variables(reference: str, default: str | None = None) -> dict:
+    """LADDER_VARIABLES with the entries that name the reference rung and the default runs' rung."""
+    out = LADDER_VARIABLES | {"error": ("1", f"relative max-norm error against the reference rung '{reference}'")}
+    if default is not None:
+        out["default_error"] = ("1", f"largest error of the default runs' rung '{default}' over the scene's "
+                                     f"quantities")
+    return out
+
+
+def at_time(long_name: str, time: float) -> str:
+    """long_name of a snapshot of a variable at time `time` (s)."""
+    return f"{long_name} at t = {time:g} s"
+
+
+def at_z(long_name: str, z: float) -> str:
+    """long_name of a probe-line variable at the axial position `z` (m; named in mm)."""
+    return f"{long_name}, at z = {z * 1e3:g} mm"
+
+
 # CF standard names (CF standard name table) of the variables that have one
 STANDARD_NAMES = {"time": "time"}
 # calendar of the time coordinate (CF §4.4.1); its epoch in VARIABLES["time"] is a stand-in for t = 0
 CALENDAR = "proleptic_gregorian"
 
 
-def cf_meta(name: str) -> tuple[str, str]:
-    """(units, long_name) of a variable of the table; KeyError naming it otherwise."""
+def cf_meta(name: str, table: dict | None = None) -> tuple[str, str]:
+    """(units, long_name) of a variable of `table` (default VARIABLES); KeyError naming it otherwise."""
     try:
-        return VARIABLES[name]
+        return (VARIABLES if table is None else table)[name]
     except KeyError:
-        raise KeyError(f"no CF metadata for variable {name!r} (ureterfsi.metadata.VARIABLES)") from None
+        where = " (ureterfsi.metadata.VARIABLES)" if table is None else ""
+        raise KeyError(f"no CF metadata for variable {name!r}{where}") from None
 
 
-def annotate(ds, table: dict | None = None):
-    """Set units and long_name of every variable of `ds` from `table` (default VARIABLES), and the CF
-    standard_name where one exists; returns ds."""
+def cf_attrs(name: str, table: dict | None = None) -> dict:
+    """{"units", "long_name"} of a variable of `table` (default VARIABLES), as attributes."""
+    units, long_name = cf_meta(name, table)
+    return {"units": units, "long_name": long_name}
+
+
+def attach(ds, table: dict | None = None):
+    """Set units and long_name of every variable of `ds` from `table` (default VARIABLES); returns ds."""
     table = VARIABLES if table is None else table
     for name in list(ds.variables):
         try:
@@ -196,7 +317,12 @@ def annotate(ds, table: dict | None = None):
         except KeyError:
             raise KeyError(f"no CF metadata for variable {name!r}") from None
         ds[name].attrs.update(units=units, long_name=long_name)
-    return standard_names(ds)
+    return ds
+
+
+def annotate(ds, table: dict | None = None):
+    """attach(ds, table), and the CF standard_name where one exists; returns ds."""
+    return standard_names(attach(ds, table))
 
 
 def standard_names(ds):

@@ -20,7 +20,8 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from . import tags  # noqa: E402
-from .checked_io import Contract, check_msh, gmsh_error, read_json  # noqa: E402
+from .checked_io import Contract, read_json  # noqa: E402
+from .meshfile import read_msh  # noqa: E402
 
 # Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
 # figures.hole_velocity_times) through wave_times() and hole_figures().
@@ -77,38 +78,6 @@ def _probe_index(ds: xr.Dataset, t: float) -> int | None:
 
 
 # ---------------------------------------------------------------------------------------------- Fig. 2
-def _read_msh(msh_path):
-    """Nodes (n, 3), cells {tag: (k, 4|3) node indices}, facets of SYMMETRY_X (k, 3), dim."""
-    import gmsh
-
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        check_msh(msh_path)
-        try:
-            gmsh.merge(str(msh_path))
-        except Exception as err:  # gmsh raises a bare Exception with its last error message
-            raise gmsh_error(msh_path, err) from None
-        node_tags, xyz, _ = gmsh.model.mesh.getNodes()
-        coords = np.zeros((int(node_tags.max()) + 1, 3))
-        coords[node_tags.astype(np.int64)] = xyz.reshape(-1, 3)
-        groups = gmsh.model.getPhysicalGroups()
-        dim = max(d for d, _ in groups)
-
-        def elements(d, tag):
-            conn = []
-            for e in gmsh.model.getEntitiesForPhysicalGroup(d, tag):
-                _, _, nodes = gmsh.model.mesh.getElements(d, e)
-                conn += [np.asarray(n, dtype=np.int64).reshape(-1, d + 1) for n in nodes]
-            return np.vstack(conn) if conn else np.zeros((0, d + 1), dtype=np.int64)
-
-        cells = {t: elements(dim, t) for d, t in groups if d == dim}
-        sym = elements(2, tags.SYMMETRY_X) if (dim == 3 and (2, tags.SYMMETRY_X) in groups) else None
-    finally:
-        gmsh.finalize()
-    return coords, cells, sym, dim
-
-
 def _facet_regions(cells: dict, facets: np.ndarray) -> np.ndarray:
     """Cell tag of the tetrahedron adjacent to each boundary triangle."""
     keys, owner = [], []
@@ -158,7 +127,9 @@ def fig02_domain(msh_path, hole_z: float | None = None, title: str | None = None
     """Computational domain of model 3: mesh in the mirror plane x = 0 coloured by region, with a zoom
     on the outlet-most side hole (cut through its axis). Full models: section of the tetrahedra by x = 0;
     r-z meshes: the triangles themselves."""
-    coords, cells, sym, dim = _read_msh(msh_path)
+    msh = read_msh(msh_path)
+    coords, cells, dim = msh.coords, msh.cells(), msh.dim
+    sym = msh.elements(2, tags.SYMMETRY_X) if dim == 3 and (2, tags.SYMMETRY_X) in msh.groups else None
     if dim == 2:   # r-z section: r = x, z = y
         polys = [coords[c][:, [1, 0]] for c in np.vstack(list(cells.values()))]
         regs = np.concatenate([np.full(len(c), t) for t, c in cells.items()])

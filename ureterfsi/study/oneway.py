@@ -46,7 +46,7 @@ from ..geometry import StentModel, UreterGeometry
 from ..probes import CellField, PointProbe, von_mises
 from ..checked_io import BadFile, Contract, open_netcdf
 from ..config import wall_sections
-from ..metadata import write_netcdf
+from ..metadata import WALL_MOTION_VARIABLES, attach, write_netcdf
 from ..provenance import config_hash, provenance_attrs
 from ..scenes.ureter import materials, ureter_fluid_scene
 from ..scenes.wall_rz import WallModel
@@ -102,18 +102,14 @@ class WallHistory:
     def to_dataset(self, cfg: dict) -> xr.Dataset:
         """CF-annotated dataset of the recorded motion, with provenance and the hash of the configuration
         sections the wall solve reads (`wall_config_hash`, checked by from_dataset)."""
-        def var(dims, data, units, long_name):
-            return (dims, np.asarray(data), {"units": units, "long_name": long_name})
-
-        ds = xr.Dataset(
-            {"inner_radial_displacement": var(("time", "z_inner"), self.inner_ur, "m", "radial displacement of the inner wall surface"),
-             "inner_axial_displacement": var(("time", "z_inner"), self.inner_uz, "m", "axial displacement of the inner wall surface"),
-             "inner_radial_velocity": var(("time", "z_inner"), self.inner_vr, "m s-1", "radial velocity of the inner wall surface"),
-             "inner_axial_velocity": var(("time", "z_inner"), self.inner_vz, "m s-1", "axial velocity of the inner wall surface"),
-             "outer_radial_displacement": var(("time", "z_outer"), self.outer_ur, "m", "radial displacement of the outer wall surface")},
-            coords={"time": ("time", self.time, {"units": "s", "long_name": "time"}),
-                    "z_inner": ("z_inner", self.z_inner, {"units": "m", "long_name": "axial position on the inner wall surface (reference)"}),
-                    "z_outer": ("z_outer", self.z_outer, {"units": "m", "long_name": "axial position on the outer wall surface (reference)"})})
+        ds = attach(xr.Dataset(
+            {"inner_radial_displacement": (("time", "z_inner"), np.asarray(self.inner_ur)),
+             "inner_axial_displacement": (("time", "z_inner"), np.asarray(self.inner_uz)),
+             "inner_radial_velocity": (("time", "z_inner"), np.asarray(self.inner_vr)),
+             "inner_axial_velocity": (("time", "z_inner"), np.asarray(self.inner_vz)),
+             "outer_radial_displacement": (("time", "z_outer"), np.asarray(self.outer_ur))},
+            coords={"time": ("time", self.time), "z_inner": ("z_inner", self.z_inner),
+                    "z_outer": ("z_outer", self.z_outer)}), WALL_MOTION_VARIABLES)
         ds.attrs.update(provenance_attrs(cfg, model="wall", fidelity="one_way", wall_solve_time_s=round(self.wall_time, 2),
                                          wall_config_hash=config_hash(wall_sections(cfg))))
         ds.attrs["Conventions"] = "CF-1.8"
