@@ -160,7 +160,7 @@ def test_run_datasets(e2e):
         if stented:
             assert ds["stent_von_mises_line"].dims == ("probe_time", "z")
             assert ds["hole_velocity_y"].dims == ("probe_time", "hole_offset")
-            assert ds["hole_flux"].dims == ("time", "hole")
+            assert ds["hole_flux"].dims == ("hole", "time")       # CF §2.4: time right of the other dimensions
             assert ds.sizes["hole"] == cfg["models"][m]["holes"] // 2     # quarter model: one side of each pair
             assert (ds["stent_max_von_mises"].values[1:] > 0).all()
         else:
