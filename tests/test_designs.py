@@ -279,7 +279,7 @@ def test_strictured_design_point_end_to_end(tmp_path):
     # the outlet or through the holes (quarter model: each recorded hole has its mirror image at -y). P2-P1 conserves
     # mass only weakly (div v orthogonal to P1), so the balance closes to the discretisation, not the solver, tolerance
     # (measured: 4e-5 of the peak outlet flow, 1.6 % of the stent's own through-flow)
-    inflow, holes = run["inlet_lumen_flux"].values, 2 * run["hole_flux"].values.sum(axis=1)
+    inflow, holes = run["inlet_lumen_flux"].values, 2 * run["hole_flux"].transpose("time", "hole").values.sum(axis=1)
     balance = inflow - lumen - holes
     print("\nstrictured point: outlet flux", q, "lumen", lumen, "holes", holes, "lumen balance", balance,
           "lumen fraction", float(ds["stent_lumen_fraction"].values.ravel()[0]))
@@ -439,11 +439,12 @@ def _lumen_balance(run, ds):
     from ureterfsi.designs import hole_mirror_weights
 
     q, lumen, inflow = run["outlet_flux"].values, run["outlet_lumen_flux"].values, run["inlet_lumen_flux"].values
-    holes = run["hole_flux"].values @ hole_mirror_weights(run)
-    assert np.isfinite(run["hole_flux"].values).all() and np.abs(run["hole_flux"].values).max(axis=0).min() > 0
+    flux = run["hole_flux"].transpose("time", "hole").values
+    holes = flux @ hole_mirror_weights(run)
+    assert np.isfinite(flux).all() and np.abs(flux).max(axis=0).min() > 0
     balance = inflow - lumen - holes
     print("outlet flux", q, "lumen", lumen, "holes", holes, "balance", balance,
-          "hole fluxes", run["hole_flux"].values.tolist(), "lumen fraction", ds["stent_lumen_fraction"].values.ravel(),
+          "hole fluxes", flux.tolist(), "lumen fraction", ds["stent_lumen_fraction"].values.ravel(),
           "ALE map mismatch", run.attrs["one_way_mesh_motion_boundary_mismatch"])
     assert np.abs(balance).max() < 2e-4 * np.abs(q).max() and np.abs(balance).max() < 0.05 * np.abs(inflow).max()
     for name, var in ds.variables.items():
@@ -506,7 +507,7 @@ def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     assert np.abs(half["outlet_flux"].values - full["outlet_flux"].values).max() < 1e-9 * q
     key = lambda r: [(round(float(z), 9), int(a), float(s)) for z, a, s in zip(r["hole_z"].values,  # noqa: E731
                                                                                 r["hole_axis"].values, r["hole_side"].values)]
-    fh, ff = half["hole_flux"].values, full["hole_flux"].values
+    fh, ff = half["hole_flux"].transpose("time", "hole").values, full["hole_flux"].transpose("time", "hole").values
     for j, k in enumerate(key(half)):
         assert np.abs(fh[:, j] - ff[:, key(full).index(k)]).max() < 1e-9 * np.abs(ff).max(), k
     assert np.abs(fh @ hole_mirror_weights(half) - ff.sum(axis=1)).max() < 1e-9 * np.abs(ff).max()   # measured 1e-14

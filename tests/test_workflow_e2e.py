@@ -160,7 +160,7 @@ def test_run_datasets(e2e):
         if stented:
             assert ds["stent_von_mises_line"].dims == ("probe_time", "z")
             assert ds["hole_velocity_y"].dims == ("probe_time", "hole_offset")
-            assert ds["hole_flux"].dims == ("time", "hole")
+            assert ds["hole_flux"].dims == ("hole", "time")       # CF §2.4: time right of the other dimensions
             assert ds.sizes["hole"] == cfg["models"][m]["holes"] // 2     # quarter model: one side of each pair
             assert (ds["stent_max_von_mises"].values[1:] > 0).all()
         else:
@@ -274,9 +274,15 @@ def test_plotting_option_reruns_only_figure_rules(e2e, tmp_path):
             assert "update pending" not in line and "params changed" not in line.lower(), line
 
 
-def test_report_holds_every_figure(e2e):
-    report = e2e.dir / "report.html"
-    ok(snakemake(e2e.dir, e2e.cfg_path, "--report", str(report)))
+@pytest.fixture(scope="module")
+def report(e2e) -> Path:
+    """The HTML report of the e2e run (snakemake --report)."""
+    path = e2e.dir / "report.html"
+    ok(snakemake(e2e.dir, e2e.cfg_path, "--report", str(path)))
+    return path
+
+
+def test_report_holds_every_figure(report):
     html = report.read_text(errors="replace")
     assert html.lstrip().lower().startswith("<!doctype html") or "<html" in html[:2000].lower()
     for stem in FIGURES:
@@ -286,6 +292,50 @@ def test_report_holds_every_figure(e2e):
     assert "t = 0.04 s" in html and "snakemake.params" not in html
     # the landing text (workflow/report/workflow.rst), rendered with the configuration
     assert "fluid-structure interaction of a stented ureter" in html and "snakemake.config" not in html
+
+
+# Debian's chromium, headless, with nothing that reaches the network (.ci/run installs it)
+CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                  "--virtual-time-budget=30000")
+REPORT_HEADING = "ureterfsi: fluid-structure interaction of a stented ureter"    # workflow/report/workflow.rst
+REPORT_CATEGORIES = ("Paper figures", "Fields")     # of the e2e run's report() outputs (one mesh level: no GCI)
+
+
+def chromium(page: Path, profile: Path, *args: str) -> str:
+    """Headless Chromium on the file `page` with a new empty profile directory; its standard output."""
+    exe = shutil.which("chromium")
+    if exe is None:
+        if os.environ.get("CI"):
+            pytest.fail("chromium is not installed: .ci/run installs Debian's chromium for this test")
+        pytest.skip("no chromium to render the report in (Debian: apt-get install chromium)")
+    run = subprocess.run([exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args, page.resolve().as_uri()],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+def visible_text(dom: str) -> str:
+    """The text of a DOM dump without its scripts and styles (the report embeds its data in scripts)."""
+    dom = re.sub(r"<(script|style)\b.*?</\1>", " ", dom, flags=re.S | re.I)
+    return re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", dom))
+
+
+def test_report_renders_in_a_browser(report, tmp_path):
+    """The report as a browser shows it: the landing page holds the workflow text (its title) and the menu
+    the result categories, and its picture is not blank (the content right of the menu has contrast)."""
+    from matplotlib.image import imread
+
+    text = visible_text(chromium(report, tmp_path / "dom-profile", "--dump-dom"))
+    assert REPORT_HEADING in text and "How to read it" in text, text[:3000]
+    for category in REPORT_CATEGORIES:
+        assert category in text, (category, text[:3000])
+    png = tmp_path / "landing.png"
+    chromium(report, tmp_path / "png-profile", f"--screenshot={png}", "--window-size=1400,2000")
+    grey = imread(png)[..., :3].mean(axis=2)
+    content = grey[:, 400:]                         # right of the navigation bar
+    assert grey.shape == (2000, 1400) and content.std() > 0.05 and (content < 0.5).mean() > 0.002, (
+        content.std(), (content < 0.5).mean())
 
 
 def planned_jobs(text: str) -> list[dict]:

@@ -450,7 +450,8 @@ def point_scalars(run) -> dict:
     """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
     q = run["outlet_flux"].values.astype(float)
-    hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((t.size, 0))
+    hole = (run["hole_flux"].transpose("time", "hole").values.astype(float) if "hole_flux" in run
+            else np.zeros((t.size, 0)))
     mirror = hole_mirror_weights(run)
     exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
     if "outlet_lumen_flux" in run:
@@ -503,6 +504,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     hole_axis, hole_side = np.full((n, n_hole), np.nan), np.full((n, n_hole), np.nan)
     for i, p in enumerate(st.points):
         r = runs[p.id]
+        flux = r["hole_flux"].transpose("time", "hole").values if "hole_flux" in r else None
         for k, v in point_scalars(r).items():
             data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
         rt = r["time"].values.astype(float)
@@ -511,7 +513,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
                 v = pressure_drop(r) if k == "pressure_drop" else r[k].values
                 series[k][i] = np.interp(t, rt, v, left=np.nan, right=np.nan)
         for j in range(r.sizes.get("hole", 0)):
-            hole_series[i, :, j] = np.interp(t, rt, r["hole_flux"].values[:, j], left=np.nan, right=np.nan)
+            hole_series[i, :, j] = np.interp(t, rt, flux[:, j], left=np.nan, right=np.nan)
             hole_z[i, j] = float(r["hole_z"].values[j])
             hole_side[i, j] = float(r["hole_side"].values[j])
             hole_axis[i, j] = float(r["hole_axis"].values[j]) if "hole_axis" in r else 1.0

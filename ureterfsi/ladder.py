@@ -51,8 +51,8 @@ def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
     else:
         t_ref, t_run = ref["time"].values, run["time"].values
         keep = (t_ref >= t_run[0] - 1e-9) & (t_ref <= t_run[-1] + 1e-9)     # the common time span
-        a = ref[name].values[keep]
-        b = run[name].values
+        a = ref[name].transpose("time", ...).values[keep]
+        b = run[name].transpose("time", ...).values
         if name == "hole_flux":
             i, j = _common_holes(ref, run)
             a, b = a[:, i], b[:, j]

@@ -131,9 +131,10 @@ class WallHistory:
             raise BadFile(source, f"wall motion covers [0, {t[-1] if t.size else 0:g}] s in steps "
                                   f"{steps.min() if steps.size else 0:g}-{steps.max() if steps.size else 0:g} s; "
                                   f"this run needs [0, {end:g}] s in steps of {dt:g} s")
-        return cls(t, ds["z_inner"].values, ds["inner_radial_displacement"].values,
-                   ds["inner_axial_displacement"].values, ds["inner_radial_velocity"].values,
-                   ds["inner_axial_velocity"].values, ds["z_outer"].values, ds["outer_radial_displacement"].values,
+        field = lambda name: ds[name].transpose("time", ...).values   # noqa: E731  (written time last, CF §2.4)
+        return cls(t, ds["z_inner"].values, field("inner_radial_displacement"),
+                   field("inner_axial_displacement"), field("inner_radial_velocity"),
+                   field("inner_axial_velocity"), ds["z_outer"].values, field("outer_radial_displacement"),
                    float(ds.attrs.get("wall_solve_time_s", 0.0)))
 
 

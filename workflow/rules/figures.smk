@@ -182,7 +182,7 @@ rule table_gci:
         md=report(
             "results/figures/table_gci.md",
             caption="../report/table_gci.rst",
-            category="Paper figures",
+            category="Mesh convergence",
         ),
     log:
         "results/logs/figures/table_gci.log",
