@@ -320,6 +320,25 @@ def test_refused_by_a_dry_run(tmp_path, name):
     assert not (tmp_path / "results").exists()
 
 
+def test_errors_of_snakemakes_own_loader_are_as_the_readme_says(tmp_path):
+    """Snakemake reads --configfile before the Snakefile runs (README, Troubleshooting): a YAML syntax error gets
+    its message without file or line, which `config check` then names; a missing overlay its FileNotFoundError,
+    whose last line names the file; a malformed --config is the workflow's own one line. Nothing is written."""
+    bad = _overlay(tmp_path, "time:\n  dt: [0.01\n")
+    r = _snakemake(tmp_path, "--configfile", DEFAULT, bad)
+    assert r.returncode != 0 and "Config file is not valid JSON or YAML" in r.stdout + r.stderr, r
+    check = subprocess.run([sys.executable, "-m", "ureterfsi.config", "check", str(DEFAULT), str(bad)],
+                           capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert check.returncode == 2 and check.stderr.startswith(f"config error: {bad}:3:"), check.stderr
+    r = _snakemake(tmp_path, "--configfile", DEFAULT, tmp_path / "missing.yaml")
+    last = (r.stdout + r.stderr).strip().splitlines()[-1]
+    assert r.returncode != 0 and last.startswith("FileNotFoundError") and "missing.yaml" in last, r
+    r = _snakemake(tmp_path, "--configfile", DEFAULT, "--config", "time={dt")
+    assert r.returncode != 0 and r.stderr.count("\n") == 1, r.stderr
+    assert r.stderr.startswith("config error: --config time:1:4: YAML syntax error"), r.stderr
+    assert not (tmp_path / "results").exists()
+
+
 def test_config_arguments_are_read_as_yaml():
     # Snakemake's own parser gives {'solver': {'newton_max_iterations': '20'}, 'mesh': {'optimize': 'false'}}
     assert read_config_args(["solver={newton_max_iterations: 20}", "mesh='{optimize: false}'", "time={dt: 0.005}",

@@ -1,7 +1,7 @@
 # Fidelity ladder (issue 5): runs of config `ladder.model` on each rung (fidelity, symmetry, mesh level,
 # time step) over [0, ladder.end], measured against the reference rung -> dataset, speed-accuracy figure and
 # table (ureterfsi.ladder). Target: `snakemake --cores 2 ladder` (not part of `all`: the fully coupled
-# reference is the expensive run this ladder exists to avoid).
+# reference is the expensive run this ladder exists to avoid). A killed rung resumes from its checkpoint.
 
 LADDER = config.get("ladder")
 
@@ -37,11 +37,13 @@ if LADDER:
             end=LADDER["end"],
             model=LADDER["model"],
             launcher=ladder_launcher,
+            checkpoint="results/checkpoints/ladder/{rung}.npz",
         shell:
             "OPENBLAS_NUM_THREADS={threads} {params.launcher} -m ureterfsi.study"
             " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
             " --symmetry {params.rung[symmetry]} --fidelity {params.rung[fidelity]} --mesh {input.mesh}"
-            " --out {output} --end {params.end} --dt {params.rung[dt]} > {log} 2>&1"
+            " --out {output} --checkpoint {params.checkpoint} --end {params.end} --dt {params.rung[dt]}"
+            " > {log} 2>&1"
 
     rule ladder:
         input:
