@@ -56,7 +56,8 @@ def run_variant(args):
     for item in filter(None, overrides.split(",")):
         key, _, value = item.partition("=")
         current = getattr(options, key)
-        setattr(options, key, value == "true" if isinstance(current, bool) else type(current)(value))
+        setattr(options, key, None if value == "none" else value == "true" if isinstance(current, bool)
+                else float(value) if current is None else type(current)(value))
     pb = MonolithicFSI(ureter_scene(cfg, mesh, ct, ft), options)
     setup = time.perf_counter() - t0
     t0 = time.perf_counter()

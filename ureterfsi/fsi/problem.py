@@ -51,7 +51,13 @@ class SolverOptions:
     mesh_stiffening: float = 1.0        # exponent q of (V_mean / V_cell)^q
     newton_rtol: float = 1e-8           # residual reduction relative to the step's first residual
     newton_atol: float = 1e-10          # absolute residual norm
-    newton_stol: float = 1e-11          # relative Newton increment ||dx|| / ||x||
+    # stagnation exit: every field's Newton increment below this fraction of the field's max norm
+    newton_stol: float = 1e-11
+    # converged also needs every field's last increment <= this fraction of its max norm (None: residual alone).
+    # One residual norm sums rows of different scales: the solid's stiffness rows outweigh the fluid's viscous
+    # ones by ~1e8, so a contracting (modified) Newton can meet the residual test with the urine unconverged.
+    newton_field_rtol: float | None = None
+    newton_increment_floor: float = 1e-14  # SI units: a field increment below it counts as converged (a field at rest)
     newton_max_iterations: int = 15
     # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
     # "constant" previous state
@@ -281,6 +287,12 @@ class MonolithicFSI:
             self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
+        nloc = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
+        self._field_owned = {}          # {field: its owned local dofs}
+        for name in self.field_names:
+            dofs = np.asarray(self.sub(name).collapse()[1])
+            self._field_owned[name] = dofs[dofs < nloc]
+        self.field_increments = {}      # {field: ||dx_f||_inf / ||x_f||_inf} of the last Newton update
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
@@ -620,6 +632,23 @@ class MonolithicFSI:
         self._eta = min(ETA_MAX, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
         return self._eta
 
+    def _measure_field_increments(self) -> None:
+        """||dx_f||_inf and ||x_f||_inf per field of the update just made (reduced over ranks)."""
+        dx, x = self.dx_vec.array_r, self.x.x.array
+        local = np.array([[np.abs(a[d]).max(initial=0.0) for d in self._field_owned.values()] for a in (dx, x)])
+        inc, scale = self.comm.allreduce(local, op=MPI.MAX)
+        self.field_increments = {f: (i, s) for f, i, s in zip(self._field_owned, inc.tolist(), scale.tolist())}
+
+    def _fields_off(self, rtol: float | None) -> dict:
+        """{field: ||dx_f|| / ||x_f||} of the fields whose last increment exceeds rtol of their max norm and
+        the absolute newton_increment_floor (all of them before the first update)."""
+        if rtol is None:
+            return {}
+        if not self.field_increments:
+            return dict.fromkeys(self.field_names, math.inf)
+        floor = self.options.newton_increment_floor
+        return {f: i / max(s, 1e-300) for f, (i, s) in self.field_increments.items() if i > max(rtol * s, floor)}
+
     def newton(self):
         """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
         o = self.options
@@ -628,13 +657,15 @@ class MonolithicFSI:
         fem_petsc.set_bc(self.x.vector, self.bcs)
         self.x.x.scatter_forward()
         r0 = None
+        self.field_increments = {}
         for it in range(o.newton_max_iterations + 1):
             r = self._assemble_residual()
             history.append(r)
             if not math.isfinite(r):
                 raise NewtonDivergence(f"non-finite residual at Newton iteration {it}", history)
             r0 = r if r0 is None else r0
-            if r <= o.newton_atol or (it > 0 and r <= o.newton_rtol * r0):
+            small = r <= o.newton_atol or (it > 0 and r <= o.newton_rtol * r0)
+            if small and (it == 0 or not self._fields_off(o.newton_field_rtol)):
                 return it, history
             if it == o.newton_max_iterations:
                 break
@@ -651,12 +682,15 @@ class MonolithicFSI:
             self.counters["factorisations" if fresh else "reused_solves"] += 1
             self.x.vector.axpy(-1.0, self.dx_vec)
             self.x.x.scatter_forward()
-            if self.dx_vec.norm() <= o.newton_stol * max(self.x.vector.norm(), 1e-300):
+            self._measure_field_increments()
+            if not self._fields_off(o.newton_stol):
                 r = self._assemble_residual()
                 history.append(r)
                 if math.isfinite(r):
                     return it + 1, history
-        raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} Newton iterations", history)
+        off = ", ".join(f"{f} {r:.1e}" for f, r in self._fields_off(o.newton_field_rtol).items())
+        raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} Newton iterations"
+                               + (f" (last increment relative to the field: {off})" if off else ""), history)
 
     # ---------------------------------------------------------------------------------------
     def set_bdf(self, dt):

@@ -31,6 +31,7 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
     s = cfg["solver"]
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
+                         newton_field_rtol=s["newton_field_rtol"],
                          newton_max_iterations=s["newton_max_iterations"], predictor=s["predictor"],
                          linear_solver=s["fully_coupled_linear_solver"] if fully_coupled else s["linear_solver"],
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
