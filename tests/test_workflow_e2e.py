@@ -8,8 +8,8 @@ or a mesh level (see the header of tests/data/e2e.yaml).
 
 One module-scoped run (`e2e`), then: the run and study datasets, figures, Table 1, logs and benchmarks;
 a forced figure re-runs alone; a plotting option re-runs only the figure rules; the HTML report holds every
-figure; the SLURM profile plans the jobs; a killed solve resumes from its checkpoint (slow); the solve rule
-under MPI (2 ranks) matches the serial run (mpi).
+figure, renders in headless Chromium and its figure pages click through; the SLURM profile plans the jobs; a
+killed solve resumes from its checkpoint (slow); the solve rule under MPI (2 ranks) matches the serial run (mpi).
 """
 from __future__ import annotations
 
@@ -398,7 +398,8 @@ def test_report_figure_pages_in_a_browser(report, tmp_path):
     visited = {}
     with Browser(chromium_exe(), CHROMIUM_FLAGS, tmp_path / "profile") as browser:
         browser.open(report.resolve().as_uri(), nav_link("Workflow"))
-        categories = browser.evaluate("Object.fromEntries(Object.entries(categories).map(([c, s]) => [c, Object.keys(s)]))")
+        categories = browser.evaluate(
+            "Object.fromEntries(Object.entries(categories).map(([c, s]) => [c, Object.keys(s)]))")
         assert set(categories) == set(REPORT_CATEGORIES), categories
         for category, subcategories in sorted(categories.items()):
             assert len(subcategories) == 1, (category, subcategories)   # the menu opens its only table
