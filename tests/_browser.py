@@ -16,7 +16,9 @@ class Browser:
     """One headless Chromium with one page of `width` x `height` CSS pixels; a context manager."""
 
     def __init__(self, exe: str, flags: tuple[str, ...], profile, width=1400, height=1000, timeout=60.0):
-        to_browser, self._out = os.pipe()          # created first: its read end is the lowest, safe to move to 3
+        # the pipe to the browser first: its read end is the lowest descriptor and the other pipe's write end
+        # the highest (at least 6), so moving them to 3 and 4 overwrites no descriptor still to be moved
+        to_browser, self._out = os.pipe()
         self._in, from_browser = os.pipe()
 
         def descriptors_3_and_4():
@@ -70,9 +72,9 @@ class Browser:
         assert "exceptionDetails" not in result, (expression, result["exceptionDetails"])
         return result["result"].get("value")
 
-    def wait_for(self, expression: str, what: str, timeout: float | None = None):
+    def wait_for(self, expression: str, what: str):
         """Poll a JavaScript expression until its value is truthy; that value (fails naming `what`)."""
-        deadline = time.monotonic() + (timeout or self.timeout)
+        deadline = time.monotonic() + self.timeout
         while not (value := self.evaluate(expression)):
             assert time.monotonic() < deadline, f"timed out waiting for {what}"
             time.sleep(0.1)
@@ -93,9 +95,6 @@ class Browser:
             " if (!el.contains(document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2))) return false;"
             " el.click(); return true; })()", f"{what} to click")
 
-    def screenshot(self, clip: dict | None = None) -> bytes:
-        """PNG of the page's viewport, or of the region `clip` {x, y, width, height} in CSS pixels."""
-        params = {"format": "png"}
-        if clip:
-            params["clip"] = {**clip, "scale": 1}
-        return base64.b64decode(self.send("Page.captureScreenshot", **params)["data"])
+    def screenshot(self, clip: dict) -> bytes:
+        """PNG of the region `clip` {x, y, width, height} of the page, in CSS pixels."""
+        return base64.b64decode(self.send("Page.captureScreenshot", format="png", clip={**clip, "scale": 1})["data"])
