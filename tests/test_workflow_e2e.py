@@ -8,8 +8,8 @@ or a mesh level (see the header of tests/data/e2e.yaml).
 
 One module-scoped run (`e2e`), then: the run and study datasets, figures, Table 1, logs and benchmarks;
 a forced figure re-runs alone; a plotting option re-runs only the figure rules; the HTML report holds every
-figure; the SLURM profile plans the jobs; a killed solve resumes from its checkpoint (slow); the solve rule
-under MPI (2 ranks) matches the serial run (mpi).
+figure, renders in headless Chromium and its figure pages click through; the SLURM profile plans the jobs; a
+killed solve resumes from its checkpoint (slow); the solve rule under MPI (2 ranks) matches the serial run (mpi).
 """
 from __future__ import annotations
 
@@ -18,7 +18,10 @@ import sys
 if "dolfinx" in sys.modules and "netCDF4" not in sys.modules:   # would segfault on the first write
     raise ImportError("netCDF4 must be imported before dolfinx (HDF5 clash, see ureterfsi.aggregate)")
 import netCDF4  # noqa: F401,E402  (before dolfinx: see ureterfsi.aggregate)
-import os  # noqa: E402
+import base64  # noqa: E402
+import io
+import json
+import os
 import re
 import shutil
 import signal
@@ -32,6 +35,7 @@ import pytest
 import xarray as xr
 import yaml
 
+from _browser import Browser
 from ureterfsi.config import deep_merge, load_config
 
 REPO = Path(__file__).resolve().parent.parent
@@ -296,20 +300,26 @@ def test_report_holds_every_figure(report):
 
 # Debian's chromium, headless, with nothing that reaches the network (.ci/run installs it)
 CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--virtual-time-budget=30000")
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync")
 REPORT_HEADING = "ureterfsi: fluid-structure interaction of a stented ureter"    # workflow/report/workflow.rst
 REPORT_CATEGORIES = ("Paper figures", "Fields")     # of the e2e run's report() outputs (one mesh level: no GCI)
 
 
-def chromium(page: Path, profile: Path, *args: str) -> str:
-    """Headless Chromium on the file `page` with a new empty profile directory; its standard output."""
+def chromium_exe() -> str:
+    """Debian's chromium; missing, the test fails under CI and is skipped elsewhere."""
     exe = shutil.which("chromium")
     if exe is None:
         if os.environ.get("CI"):
             pytest.fail("chromium is not installed: .ci/run installs Debian's chromium for this test")
         pytest.skip("no chromium to render the report in (Debian: apt-get install chromium)")
-    run = subprocess.run([exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args, page.resolve().as_uri()],
+    return exe
+
+
+def chromium(page: Path, profile: Path, *args: str) -> str:
+    """Headless Chromium on the file `page` with a new empty profile directory, its scripts given 30 s of
+    virtual time; its standard output."""
+    run = subprocess.run([chromium_exe(), *CHROMIUM_FLAGS, "--virtual-time-budget=30000",
+                          f"--user-data-dir={profile}", *args, page.resolve().as_uri()],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-3000:]
     return run.stdout
@@ -336,6 +346,88 @@ def test_report_renders_in_a_browser(report, tmp_path):
     content = grey[:, 400:]                         # right of the navigation bar
     assert grey.shape == (2000, 1400) and content.std() > 0.05 and (content < 0.5).mean() > 0.002, (
         content.std(), (content < 0.5).mean())
+
+
+def caption_opening(entry: str) -> str:
+    """The opening words of the caption of the report entry `entry` (results/figures/<stem>.<ext>, caption
+    workflow/report/<stem>.rst): its first line up to the first Jinja expression, without the rst emphasis."""
+    first_line = (REPO / "workflow" / "report" / f"{Path(entry).stem}.rst").read_text().splitlines()[0]
+    return re.split(r"\{[{%]", first_line)[0].replace("**", "").strip()
+
+
+def js(value) -> str:
+    """`value` as a JavaScript literal."""
+    return json.dumps(value)
+
+
+def nav_link(text: str) -> str:
+    """JavaScript finding the link of the report's navigation bar (menu or breadcrumbs) showing `text`."""
+    return f"[...document.querySelectorAll('nav a')].find(a => a.textContent.trim() === {js(text)})"
+
+
+def entry_button(entry: str, index: int) -> str:
+    """JavaScript finding a button of the row of `entry` in a category's table: 0 view (eye), 1 information."""
+    return (f"[...document.querySelectorAll('nav tbody tr')].find(tr => tr.cells[0].textContent === {js(entry)})"
+            f"?.cells[1].querySelectorAll('a')[{index}]")
+
+
+# the picture of the content pane showing `entry`: its decoded size and its region within the viewport
+SHOWN_IMAGE = """(() => {{
+  const img = [...document.querySelectorAll('img')].find(i => !i.closest('nav') && i.src === results[{0}].data_uri);
+  if (!img || !img.complete || !img.naturalWidth) return null;
+  const r = img.getBoundingClientRect(), x = Math.max(r.x, 0), y = Math.max(r.y, 0);
+  return {{size: [img.naturalWidth, img.naturalHeight], clip: {{x, y,
+           width: Math.min(r.right, innerWidth) - x, height: Math.min(r.bottom, innerHeight) - y}}}};
+}})()"""
+# the caption of the information page of an entry (its "Description")
+SHOWN_CAPTION = """(() => {
+  const heading = [...document.querySelectorAll('nav li')].find(li => li.textContent === 'Description');
+  return heading && heading.nextElementSibling.innerText;
+})()"""
+
+
+def test_report_figure_pages_in_a_browser(report, tmp_path):
+    """Every result category and every entry of the report, clicked through in headless Chromium (DevTools
+    protocol, tests/_browser.py) as a reader would: the category in the menu, then for each entry of its table
+    the eye button (a figure shows in the content pane: the PNG decoded at its own size and its picture not
+    blank; a table is a download link holding the file), the information button (the entry's caption), and
+    back to the category by the breadcrumb. Every figure and Table 1 are among the entries visited."""
+    from matplotlib.image import imread
+    from PIL import Image
+
+    visited = {}
+    with Browser(chromium_exe(), CHROMIUM_FLAGS, tmp_path / "profile") as browser:
+        browser.open(report.resolve().as_uri(), nav_link("Workflow"))
+        categories = browser.evaluate(
+            "Object.fromEntries(Object.entries(categories).map(([c, s]) => [c, Object.keys(s)]))")
+        assert set(categories) == set(REPORT_CATEGORIES), categories
+        for category, subcategories in sorted(categories.items()):
+            assert len(subcategories) == 1, (category, subcategories)   # the menu opens its only table
+            browser.click(nav_link(category), f"category {category!r} in the menu")
+            entries = browser.evaluate(f"categories[{js(category)}][{js(subcategories[0])}]")
+            visited[category] = entries
+            for entry in sorted(entries):
+                where = f"{category} -> {entry}"
+                kind = browser.evaluate(f"getResultMimeType({js(entry)})")
+                if kind == "image/png":
+                    browser.click(entry_button(entry, 0), f"the view button of {where}")
+                    shown = browser.wait_for(SHOWN_IMAGE.format(js(entry)), f"the figure of {where}")
+                    assert shown["size"] == list(Image.open(report.parent / entry).size), where
+                    grey = imread(io.BytesIO(browser.screenshot(shown["clip"])))[..., :3].mean(axis=2)
+                    assert grey.size > 10_000 and grey.std() > 0.05 and (grey < 0.5).mean() > 0.002, where
+                else:
+                    link = browser.evaluate(f"{entry_button(entry, 0)}.href")
+                    header, payload = link.split(",", 1)
+                    assert header.startswith("data:") and header.endswith(";base64"), where
+                    assert base64.b64decode(payload) == (report.parent / entry).read_bytes(), where
+                browser.click(entry_button(entry, 1), f"the information button of {where}")
+                caption = browser.wait_for(SHOWN_CAPTION, f"the caption of {where}")
+                assert caption_opening(entry) in " ".join(caption.split()), (where, caption[:300])
+                browser.click(nav_link(category), f"the breadcrumb back to {category!r} from {entry}")
+            browser.click(nav_link("Results"), f"the breadcrumb back to the menu from {category!r}")
+    print("report pages visited:", visited)
+    seen = {entry for entries in visited.values() for entry in entries}
+    assert {f"results/figures/{stem}.png" for stem in FIGURES} | {"results/figures/table1.md"} <= seen, seen
 
 
 def planned_jobs(text: str) -> list[dict]:
