@@ -501,6 +501,20 @@ class MonolithicFSI:
         self.mesh_motion.solve(float(self.t.value), u_n + w * (u_n - u_nm1))
         self.timings["mesh_motion"] += _time.perf_counter() - t0
 
+    def preview_mesh_motion(self, times, visit) -> None:
+        """visit(t, d) for each of `times`, d the segregated mesh displacement the Dirichlet data of time t give (a
+        prediction before the run); the displacement and the boundary data of the current time are restored."""
+        d = self.mesh_displacement
+        saved = d.x.array.copy()
+        try:
+            for t in times:
+                self._update_bcs(float(t))
+                self.mesh_motion.solve(float(t), d.x.array.copy())
+                visit(float(t), d)
+        finally:
+            d.x.array[:] = saved
+            self._update_bcs(self.time)
+
     def _setup_ale_jacobian(self, u, fluid_tags):
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
         Q = fem.FunctionSpace(self.mesh, ("DG", 1))
