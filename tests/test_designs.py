@@ -321,9 +321,10 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
           float(d["mean_pressure_drop"]))
     assert float(d["predicted_min_jacobian"]) >= limit and str(d["mesh_motion"].values) == "algebraic"
     assert float(d["min_ale_jacobian"]) > 0 and np.isfinite(float(d["peak_outlet_flux"]))
-    # the run used the map that was predicted: its minimum is the prediction (up to the Dirichlet values the solver
-    # sets on top of the interpolated map)
-    assert float(d["min_ale_jacobian"]) == pytest.approx(float(d["predicted_min_jacobian"]), abs=1e-3)
+    # the run used the map that was predicted, the Dirichlet values set on top of the interpolated map as the run does:
+    # its minimum is the prediction (without them the prediction was 0.4948 against the run's 0.4915)
+    assert float(d["min_ale_jacobian"]) == pytest.approx(float(d["predicted_min_jacobian"]), abs=1e-9)
+    assert np.isnan(float(d["predicted_extension_min_jacobian"]))
     assert np.isfinite(float(d["peak_pressure_drop"])) and d["peak_pressure_drop"].attrs["units"] == "Pa"
     with xr.open_dataset(tmp_path / f"results/designs/gap10/{str(d['point_id'].values)}/run.nc") as run:
         run.load()
@@ -361,12 +362,13 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
 
 
 @pytest.mark.parametrize("axisymmetric", [False, True])
-def test_algebraic_min_jacobian_of_a_uniform_dilation(axisymmetric):
-    """ureterfsi.study.oneway.algebraic_min_jacobian of d = c t x (3D: J = (1 + c t)^3) and of d = (c t r, 0) in r-z
+def test_map_min_jacobian_of_a_uniform_dilation(axisymmetric):
+    """ureterfsi.study.oneway.map_min_jacobian of d = c t x (3D: J = (1 + c t)^3) and of d = (c t r, 0) in r-z
     (J = (1 + c t)^2, the axis vertices through the limit 1 + du_r/dr): the minimum over the times and its time."""
+    from dolfinx import fem
     from dolfinx import mesh as dmesh
     from mpi4py import MPI
-    from ureterfsi.study.oneway import algebraic_min_jacobian
+    from ureterfsi.study.oneway import map_min_jacobian
 
     c = -0.4
     if axisymmetric:
@@ -375,7 +377,8 @@ def test_algebraic_min_jacobian_of_a_uniform_dilation(axisymmetric):
     else:
         msh = dmesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2)
         blend = lambda x, t: c * t * x[:3]                              # noqa: E731
-    m = algebraic_min_jacobian(msh, blend, [0.0, 1.0, 0.5], axisymmetric)
+    d = fem.Function(fem.VectorFunctionSpace(msh, ("Lagrange", 2)))
+    m = map_min_jacobian(d, lambda t: d.interpolate(lambda x: blend(x, t)), [0.0, 1.0, 0.5], axisymmetric)
     assert m.time == 1.0 and m.value == pytest.approx((1 + c) ** (2 if axisymmetric else 3), rel=1e-12)
 
 

@@ -318,18 +318,12 @@ def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> Jacobi
     return JacobianMinimum(*best)
 
 
-def algebraic_min_jacobian(mesh, blend, times, axisymmetric: bool, degree: int = 2) -> JacobianMinimum:
-    """map_min_jacobian of the algebraic map d = blend(x, t) interpolated in P`degree` on `mesh` (the fluid submesh)."""
-    d = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", degree)))
-    return map_min_jacobian(d, lambda t: d.interpolate(lambda x: blend(x, t)), times, axisymmetric)
-
-
-def extension_min_jacobian(pb: MonolithicFSI, times, axisymmetric: bool) -> JacobianMinimum:
-    """map_min_jacobian of the extension problem of `pb` (posed without a prescribed map) solved from its Dirichlet
-    data at each of `times`: a linear problem given the recorded wall motion (its LU factor is the run's)."""
-    best = []
-    pb.preview_mesh_motion(times, lambda t, d: best.append(map_min_jacobian(d, lambda _: None, [t], axisymmetric)))
-    return min(best, key=lambda m: m.value)
+def predicted_min_jacobian(pb: MonolithicFSI, times, axisymmetric: bool) -> JacobianMinimum:
+    """map_min_jacobian of the segregated mesh motion of `pb` at `times` before its run: the prescribed map with the
+    Dirichlet values set on top, or the extension solved from them (a linear problem given the recorded wall motion;
+    its LU factor is the run's), i.e. the run's own map at those times."""
+    with pb.mesh_motion_preview() as at:
+        return map_min_jacobian(pb.mesh_displacement, at, times, axisymmetric)
 
 
 def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
@@ -340,38 +334,41 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
     `solver.one_way_auto_min_jacobian`, then the extension unless its own falls below it too: MeshMotionRefused."""
     fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
     u_wall, v_wall = inner_wall_motion(history, axisymmetric)
-    blend, rule = None, cfg["solver"]["one_way_mesh_motion"]
-    choice = MeshMotionChoice(rule, "extension" if rule == "extension" else "algebraic")
-    if rule in ("algebraic", "auto"):
-        g = UreterGeometry.from_config(cfg)
-        has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
-        blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius,
-                             axisymmetric, g.stent_offset if has_stent else 0.0)
-    limit = cfg["solver"]["one_way_auto_min_jacobian"]
-    if rule == "auto":
-        t0 = _time.perf_counter()
-        alg = algebraic_min_jacobian(fluid.mesh, blend, history.time, axisymmetric, solver_options(cfg).velocity_degree)
-        choice = MeshMotionChoice(rule, "algebraic" if alg.value >= limit else "extension", alg)
-        log.info("mesh motion auto: the algebraic map's minimum Jacobian %s %s %g -> %s (%.1f s)", alg.text(),
-                 ">=" if alg.value >= limit else "<", limit, choice.used, _time.perf_counter() - t0)
-        if choice.used == "extension":
-            blend = None
-    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
-                               mesh_motion=blend)
+    rule = cfg["solver"]["one_way_mesh_motion"]
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
-    pb = MonolithicFSI(scene, options)
-    if rule == "auto" and choice.used == "extension":
-        t0 = _time.perf_counter()
-        choice.extension = ext = extension_min_jacobian(pb, history.time, axisymmetric)
-        log.info("mesh motion auto: the extension's minimum Jacobian %s (%.1f s)", ext.text(), _time.perf_counter() - t0)
-        if ext.value < limit:
-            s = cfg["solver"]
-            raise MeshMotionRefused(
-                f"both ALE maps fall below solver.one_way_auto_min_jacobian = {limit:g} over the recorded wall motion: "
-                f"algebraic {choice.algebraic.text()}; extension ({s['mesh_motion']}, mesh_stiffening "
-                f"{s['mesh_stiffening']:g}) {ext.text()}; widen the gap (lower geometry.stricture_fraction), move the "
-                f"side holes from under the stricture (hole_pair_spacing, stricture_position) or lower the load "
-                f"(peristalsis.peak_traction)")
+
+    def posed(blend):
+        return MonolithicFSI(ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall,
+                                                axisymmetric, mesh_motion=blend), options)
+
+    if rule == "extension":
+        return posed(None), fluid, MeshMotionChoice(rule, "extension")
+    g = UreterGeometry.from_config(cfg)
+    has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
+    pb = posed(radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius, axisymmetric,
+                            g.stent_offset if has_stent else 0.0))
+    if rule == "algebraic":
+        return pb, fluid, MeshMotionChoice(rule, "algebraic")
+    limit = cfg["solver"]["one_way_auto_min_jacobian"]
+    t0 = _time.perf_counter()
+    choice = MeshMotionChoice(rule, "algebraic", predicted_min_jacobian(pb, history.time, axisymmetric))
+    log.info("mesh motion auto: the algebraic map's minimum Jacobian %s (%.1f s)", choice.algebraic.text(),
+             _time.perf_counter() - t0)
+    if choice.algebraic.value >= limit:
+        return pb, fluid, choice
+    t0 = _time.perf_counter()
+    pb = posed(None)
+    choice.used, choice.extension = "extension", predicted_min_jacobian(pb, history.time, axisymmetric)
+    log.info("mesh motion auto: the algebraic map's minimum < %g; the extension's %s (%.1f s)", limit,
+             choice.extension.text(), _time.perf_counter() - t0)
+    if choice.extension.value < limit:
+        s = cfg["solver"]
+        raise MeshMotionRefused(
+            f"both ALE maps fall below solver.one_way_auto_min_jacobian = {limit:g} over the recorded wall motion: "
+            f"algebraic {choice.algebraic.text()}; extension ({s['mesh_motion']}, mesh_stiffening "
+            f"{s['mesh_stiffening']:g}) {choice.extension.text()}; widen the gap (lower geometry.stricture_fraction), "
+            f"move the side holes from under the stricture (hole_pair_spacing, stricture_position) or lower the load "
+            f"(peristalsis.peak_traction)")
     return pb, fluid, choice
 
 
