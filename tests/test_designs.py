@@ -387,11 +387,12 @@ def test_map_min_jacobian_of_a_uniform_dilation(axisymmetric):
     d = fem.Function(fem.VectorFunctionSpace(msh, ("Lagrange", 2)))
     m = map_min_jacobian(d, lambda t: d.interpolate(lambda x: blend(x, t)), [0.0, 1.0, 0.5], axisymmetric)
     assert m.time == 1.0 and m.value == pytest.approx((1 + c) ** (2 if axisymmetric else 3), rel=1e-12)
+    assert ("(r, z) = (" if axisymmetric else "(x, y, z) = (") in m.text()
 
 
 def test_map_min_jacobian_locates_its_minimum():
     """ureterfsi.study.oneway.map_min_jacobian of d = (c t x^2 / 2, 0, 0) on the unit cube (J = 1 + c t x, c < 0):
-    the minimum 1 + c at t = 1 on the face x = 1, the place reported with it."""
+    the minimum 1 + c at t = 1 on the face x = 1, the place reported with it; a non-finite map counts as -inf."""
     from dolfinx import fem
     from dolfinx import mesh as dmesh
     from mpi4py import MPI
@@ -403,6 +404,10 @@ def test_map_min_jacobian_locates_its_minimum():
     m = map_min_jacobian(d, fill, [0.5, 1.0, 0.0], False)
     assert m.time == 1.0 and m.value == pytest.approx(1 + c, rel=1e-12) and m.where[0] == pytest.approx(1.0)
     assert f"t = 1 s, (x, y, z) = (1.000e+00, " in m.text()
+    # a map that is not finite somewhere counts as inverted (-inf), never as a pass
+    nan = map_min_jacobian(d, lambda t: d.interpolate(lambda x: np.vstack([np.full(x.shape[1], np.nan * t)] * 3)),
+                           [0.0, 1.0], False)
+    assert nan.value == -np.inf
 
 
 def test_radial_blend_follows_the_strictured_wall():

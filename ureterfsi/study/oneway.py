@@ -264,14 +264,15 @@ class MeshMotionRefused(RuntimeError):
 
 @dataclass(frozen=True)
 class JacobianMinimum:
-    """The minimum Jacobian of an ALE map over a set of times: `value` at `time` (s), at the reference vertex
-    `where` (x, y, z) (m; r-z: (r, z, nan))."""
+    """The minimum Jacobian of an ALE map over a set of times (-inf where it is not finite): `value` at `time` (s), at
+    the reference vertex `where` (x, y, z) (m; r-z: (r, z, nan))."""
     value: float
     time: float
     where: tuple
 
     def text(self) -> str:
-        return f"{self.value:.3g} at t = {self.time:g} s, (x, y, z) = ({', '.join(f'{c:.3e}' for c in self.where)}) m"
+        axes, xyz = ("(r, z)", self.where[:2]) if math.isnan(self.where[2]) else ("(x, y, z)", self.where)
+        return f"{self.value:.3g} at t = {self.time:g} s, {axes} = ({', '.join(f'{c:.3e}' for c in xyz)}) m"
 
 
 NO_MINIMUM = JacobianMinimum(math.nan, math.nan, (math.nan,) * 3)
@@ -308,7 +309,7 @@ def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> Jacobi
     for t in times:
         fill(float(t))
         jac.interpolate(expr)
-        vals = jac.x.array[:n_local]
+        vals = np.where(np.isfinite(jac.x.array[:n_local]), jac.x.array[:n_local], -math.inf)
         local = (math.inf, float(t), (math.nan,) * 3)
         if vals.size:
             i = int(np.argmin(vals))
