@@ -473,13 +473,16 @@ def point_scalars(run) -> dict:
 
 def mesh_motion_variables(points, runs) -> dict:
     """Per point (on the one-way rung): the ALE map its urine solve used (solver.one_way_mesh_motion, resolved under
-    auto), the algebraic map's predicted minimum Jacobian (auto; NaN otherwise) and the run's minimum Jacobian."""
+    auto), the algebraic map's and the extension's predicted minimum Jacobians (auto, the extension's where the
+    algebraic one is below the limit; NaN otherwise) and the run's minimum Jacobian."""
     def attr(p, key, default):
         return runs[p.id].attrs.get(key, default)
 
     return {"mesh_motion": (("design",), np.array([str(attr(p, "one_way_mesh_motion", "")) for p in points], dtype=object)),
             "predicted_min_jacobian": (("design",), np.array([float(attr(p, "one_way_predicted_min_jacobian", np.nan))
                                                               for p in points])),
+            "predicted_extension_min_jacobian": (("design",), np.array(
+                [float(attr(p, "one_way_predicted_extension_min_jacobian", np.nan)) for p in points])),
             "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 

@@ -74,6 +74,9 @@ VARIABLES = {
                          "one_way_mesh_motion, chosen per design point under auto)"),
     "predicted_min_jacobian": ("1", "minimum Jacobian of the algebraic ALE map over the recorded wall motion, "
                                     "evaluated before the solve (one_way_mesh_motion auto)"),
+    "predicted_extension_min_jacobian": ("1", "minimum Jacobian of the extension (ALE) over the recorded wall "
+                                              "motion, evaluated before the solve where the algebraic map's is below "
+                                              "solver.one_way_auto_min_jacobian (one_way_mesh_motion auto)"),
     "step_wall_time": ("s", "wall-clock time of the step"),
     "model": ("1", "stent model number (paper Table 1)"),
     "model_label": ("1", "stent model label: distance between side-hole pairs (paper Table 1)"),

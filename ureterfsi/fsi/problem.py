@@ -13,6 +13,7 @@ Time: BDF2 with variable step (Backward Euler for the first step); steady mode s
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import time as _time
@@ -512,6 +513,26 @@ class MonolithicFSI:
         w = float(self.dt.value) / self.dt_prev if self.dt_prev else 0.0
         self.mesh_motion.solve(float(self.t.value), u_n + w * (u_n - u_nm1))
         self.timings["mesh_motion"] += _time.perf_counter() - t0
+
+    @contextlib.contextmanager
+    def mesh_motion_preview(self):
+        """A callable t -> the segregated mesh displacement the Dirichlet data of time t give (the run's own map at t,
+        for a prediction before the run); on exit the displacement, the boundary data of the current time and the
+        mesh motion's recorded mismatch are restored."""
+        d, motion = self.mesh_displacement, self.mesh_motion
+        saved, mismatch = d.x.array.copy(), motion.mismatch
+
+        def at(t: float) -> fem.Function:
+            self._update_bcs(t)
+            motion.solve(t, d.x.array.copy())
+            return d
+
+        try:
+            yield at
+        finally:
+            d.x.array[:] = saved
+            motion.mismatch = mismatch
+            self._update_bcs(self.time)
 
     def _setup_ale_jacobian(self, u, fluid_tags):
         """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""

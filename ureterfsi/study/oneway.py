@@ -256,68 +256,121 @@ def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: boo
     return field
 
 
+class MeshMotionRefused(RuntimeError):
+    """Both ALE maps of a one-way urine solve are predicted to fall below solver.one_way_auto_min_jacobian over the
+    recorded wall motion: the point is refused before the solve (rather than stopping mid-run, or running on a mesh
+    squeezed at the place its results come from)."""
+
+
+@dataclass(frozen=True)
+class JacobianMinimum:
+    """The minimum Jacobian of an ALE map over a set of times (-inf where it is not finite): `value` at `time` (s), at
+    the reference vertex `where` (x, y, z) (m; r-z: (r, z, nan))."""
+    value: float
+    time: float
+    where: tuple
+
+    def text(self) -> str:
+        axes, xyz = ("(r, z)", self.where[:2]) if math.isnan(self.where[2]) else ("(x, y, z)", self.where)
+        return f"{self.value:.3g} at t = {self.time:g} s, {axes} = ({', '.join(f'{c:.3e}' for c in xyz)}) m"
+
+
+NO_MINIMUM = JacobianMinimum(math.nan, math.nan, (math.nan,) * 3)
+
+
 @dataclass
 class MeshMotionChoice:
     """The one-way urine solve's ALE map: `used` (algebraic | extension) by `rule` (solver.one_way_mesh_motion);
-    under "auto" the algebraic map's minimum Jacobian over the recorded wall motion, `predicted_min_jacobian` at
-    `predicted_time` (NaN otherwise), decides against solver.one_way_auto_min_jacobian."""
+    under "auto" the predicted minimum Jacobians of the algebraic map (`algebraic`) and, where that one falls below
+    solver.one_way_auto_min_jacobian, of the extension (`extension`) over the recorded wall motion (NO_MINIMUM where
+    not predicted)."""
     rule: str
     used: str
-    predicted_min_jacobian: float = math.nan
-    predicted_time: float = math.nan
+    algebraic: JacobianMinimum = NO_MINIMUM
+    extension: JacobianMinimum = NO_MINIMUM
 
 
-def algebraic_min_jacobian(mesh, blend, times, axisymmetric: bool, degree: int = 2) -> tuple[float, float]:
-    """(min over `times` of det(I + Grad d), the time of it) of the algebraic map d = blend(x, t) interpolated in
-    P`degree` on `mesh` (the fluid submesh), at the vertices of every cell (DG1, as the solver's inversion guard;
-    on the r-z axis the hoop stretch takes its limit 1 + du_r/dr)."""
+def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> JacobianMinimum:
+    """The minimum over `times` of det(I + Grad d), d set by fill(t) for each time, at the vertices of every cell of
+    d's mesh (DG1, as the solver's inversion guard; on the r-z axis the hoop stretch takes its limit 1 + du_r/dr)."""
+    mesh = d.function_space.mesh
     ops = Operators(mesh, axisymmetric)
-    d = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", degree)))
-    J = ufl.det(physics.deformation_gradient(ops, d))
+    F = physics.deformation_gradient(ops, d)
+    J = ufl.det(F)
     if axisymmetric:
-        F, g = physics.deformation_gradient(ops, d), ufl.grad(d)
+        g = ufl.grad(d)
         J = ufl.conditional(ufl.gt(abs(ops.r), 1e-300), J, ufl.det(ufl.as_tensor(
             [[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])))
     Q = fem.FunctionSpace(mesh, ("DG", 1))
     jac, expr = fem.Function(Q), fem.Expression(J, Q.element.interpolation_points())
     n_local = Q.dofmap.index_map.size_local
-    best = (math.inf, math.nan)
+    xyz = Q.tabulate_dof_coordinates()
+    best = (math.inf, math.nan, (math.nan,) * 3)
     for t in times:
-        d.interpolate(lambda x: blend(x, float(t)))
+        fill(float(t))
         jac.interpolate(expr)
-        local = float(jac.x.array[:n_local].min(initial=math.inf))
-        best = min(best, (mesh.comm.allreduce(local, MPI.MIN), float(t)))
-    return best
+        vals = np.where(np.isfinite(jac.x.array[:n_local]), jac.x.array[:n_local], -math.inf)
+        local = (math.inf, float(t), (math.nan,) * 3)
+        if vals.size:
+            i = int(np.argmin(vals))
+            where = tuple(float(c) for c in xyz[i]) if not axisymmetric else (float(xyz[i, 0]), float(xyz[i, 1]), math.nan)
+            local = (float(vals[i]), float(t), where)
+        best = min([best] + mesh.comm.allgather(local), key=lambda item: item[0])
+    return JacobianMinimum(*best)
+
+
+def predicted_min_jacobian(pb: MonolithicFSI, times, axisymmetric: bool) -> JacobianMinimum:
+    """map_min_jacobian of the segregated mesh motion of `pb` at `times` before its run: the prescribed map with the
+    Dirichlet values set on top, or the extension solved from them (a linear problem given the recorded wall motion;
+    its LU factor is the run's), i.e. the run's own map at those times."""
+    with pb.mesh_motion_preview() as at:
+        return map_min_jacobian(pb.mesh_displacement, at, times, axisymmetric)
 
 
 def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
     """(problem, fluid submesh, MeshMotionChoice): the urine alone on the fluid part of the mesh, ALE, the recorded
     inner-wall motion prescribed, the stent rigid, the mesh motion segregated (step 2 of the rung): the radial
     blend (`solver.one_way_mesh_motion: algebraic`), the extension problem (`extension`), or (`auto`) the blend
-    unless its minimum Jacobian over the recorded wall motion falls below `solver.one_way_auto_min_jacobian`."""
+    unless its predicted minimum Jacobian over the recorded wall motion falls below
+    `solver.one_way_auto_min_jacobian`, then the extension unless its own falls below it too: MeshMotionRefused."""
     fluid = extract(mesh, cell_tags, facet_tags, [tags.FLUID])
     u_wall, v_wall = inner_wall_motion(history, axisymmetric)
-    blend, rule = None, cfg["solver"]["one_way_mesh_motion"]
-    choice = MeshMotionChoice(rule, "extension" if rule == "extension" else "algebraic")
-    if rule in ("algebraic", "auto"):
-        g = UreterGeometry.from_config(cfg)
-        has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
-        blend = radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius,
-                             axisymmetric, g.stent_offset if has_stent else 0.0)
-    if rule == "auto":
-        t0 = _time.perf_counter()
-        jmin, at = algebraic_min_jacobian(fluid.mesh, blend, history.time, axisymmetric,
-                                          solver_options(cfg).velocity_degree)
-        limit = cfg["solver"]["one_way_auto_min_jacobian"]
-        choice = MeshMotionChoice(rule, "algebraic" if jmin >= limit else "extension", jmin, at)
-        log.info("mesh motion auto: the algebraic map's minimum Jacobian %.4f (t = %g s) %s %g -> %s (%.1f s)",
-                 jmin, at, ">=" if jmin >= limit else "<", limit, choice.used, _time.perf_counter() - t0)
-        if choice.used == "extension":
-            blend = None
-    scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, axisymmetric,
-                               mesh_motion=blend)
+    rule = cfg["solver"]["one_way_mesh_motion"]
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated")
-    return MonolithicFSI(scene, options), fluid, choice
+
+    def posed(blend):
+        return MonolithicFSI(ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall,
+                                                axisymmetric, mesh_motion=blend), options)
+
+    if rule == "extension":
+        return posed(None), fluid, MeshMotionChoice(rule, "extension")
+    g = UreterGeometry.from_config(cfg)
+    has_stent = fluid.mesh.comm.allreduce(fluid.facet_tags.find(tags.FLUID_STENT).size) > 0
+    pb = posed(radial_blend(history, g.stent_outer_radius if has_stent else 0.0, g.inner_radius, axisymmetric,
+                            g.stent_offset if has_stent else 0.0))
+    if rule == "algebraic":
+        return pb, fluid, MeshMotionChoice(rule, "algebraic")
+    limit = cfg["solver"]["one_way_auto_min_jacobian"]
+    t0 = _time.perf_counter()
+    choice = MeshMotionChoice(rule, "algebraic", predicted_min_jacobian(pb, history.time, axisymmetric))
+    log.info("mesh motion auto: the algebraic map's minimum Jacobian %s (%.1f s)", choice.algebraic.text(),
+             _time.perf_counter() - t0)
+    if choice.algebraic.value >= limit:
+        return pb, fluid, choice
+    t0 = _time.perf_counter()
+    pb = posed(None)
+    choice.used, choice.extension = "extension", predicted_min_jacobian(pb, history.time, axisymmetric)
+    log.info("mesh motion auto: the algebraic map's minimum < %g; the extension's %s (%.1f s)", limit,
+             choice.extension.text(), _time.perf_counter() - t0)
+    if choice.extension.value < limit:
+        s = cfg["solver"]
+        raise MeshMotionRefused(
+            f"both ALE maps fall below solver.one_way_auto_min_jacobian = {limit:g} over the recorded wall motion: "
+            f"algebraic {choice.algebraic.text()}; extension ({s['mesh_motion']}, mesh_stiffening "
+            f"{s['mesh_stiffening']:g}) {choice.extension.text()}; widen the gap (lower geometry.stricture_fraction), "
+            f"move the side holes from under the stricture (hole_pair_spacing, stricture_position) or lower the load "
+            f"(peristalsis.peak_traction)")
+    return pb, fluid, choice
 
 
 # ------------------------------------------------------------------------------------------------
@@ -446,8 +499,10 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
             "wall_motion_file": str(wall_path or ""),
             "one_way_mesh_motion": motion.used,
             "one_way_mesh_motion_rule": motion.rule,
-            "one_way_predicted_min_jacobian": motion.predicted_min_jacobian,
-            "one_way_predicted_min_jacobian_time": motion.predicted_time,
+            "one_way_predicted_min_jacobian": motion.algebraic.value,
+            "one_way_predicted_min_jacobian_time": motion.algebraic.time,
+            "one_way_predicted_extension_min_jacobian": motion.extension.value,
+            "one_way_predicted_extension_min_jacobian_time": motion.extension.time,
             "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
             "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
             "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
