@@ -39,12 +39,21 @@ def solve(cfg, args, value, out):
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
         json.dump(cfg, fh)
     mesh = args.mesh or str(ROOT / f"results/meshes/quarter/model{args.model}_{args.level}.msh")
-    subprocess.run([sys.executable, "-m", "ureterfsi.study", "--config-json", fh.name, "--model", args.model,
-                    "--level", args.level, "--symmetry", "quarter", "--fidelity", args.fidelity, "--end",
-                    str(args.end), "--mesh", mesh, "--out", str(out)],
-                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    r = subprocess.run([sys.executable, "-m", "ureterfsi.study", "--config-json", fh.name, "--model", args.model,
+                        "--level", args.level, "--symmetry", "quarter", "--fidelity", args.fidelity, "--end",
+                        str(args.end), "--mesh", mesh, "--out", str(out)], capture_output=True, text=True)
     Path(fh.name).unlink()
+    if r.returncode:
+        sys.exit(f"{args.setting} = {value}: the run failed (exit {r.returncode}): {r.stderr.strip()[-2000:]}")
     return xr.open_dataset(out, decode_times=False)
+
+
+def parse(text: str):
+    """A command-line value: a number (1e-6, which YAML 1.1 reads as a string) or YAML (null, linear)."""
+    try:
+        return float(text)
+    except ValueError:
+        return yaml.safe_load(text)
 
 
 def main():
@@ -63,7 +72,7 @@ def main():
     cfg = load_config_files(args.config)
     work = Path(args.workdir or tempfile.mkdtemp(prefix="newton_settings_"))
     work.mkdir(parents=True, exist_ok=True)
-    runs = {v: solve(cfg, args, yaml.safe_load(v), work / f"run{i}.nc") for i, v in enumerate(args.values)}
+    runs = {v: solve(cfg, args, parse(v), work / f"run{i}.nc") for i, v in enumerate(args.values)}
     print(f"model {args.model}, {args.level} quarter mesh, {args.fidelity}, 0-{args.end} s, dt = {cfg['time']['dt']} s, "
           f"{args.setting} in {args.values}")
     print(f"{'value':10s} {'wall s':>8s} {'peak MiB':>9s} {'Newton':>7s}  counters / timings (s)")
