@@ -450,10 +450,9 @@ def point_scalars(run) -> dict:
     """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
     q = run["outlet_flux"].values.astype(float)
-    hole = (run["hole_flux"].transpose("time", "hole").values.astype(float) if "hole_flux" in run
-            else np.zeros((t.size, 0)))
+    hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((0, t.size))   # (hole, time)
     mirror = hole_mirror_weights(run)
-    exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
+    exchange = np.array([_trapz(np.abs(h), t) for h in hole])
     if "outlet_lumen_flux" in run:
         lumen = run["outlet_lumen_flux"].values.astype(float)
         inside, outside = _trapz(np.abs(lumen), t), _trapz(np.abs(q - lumen), t)
@@ -462,7 +461,7 @@ def point_scalars(run) -> dict:
         lumen_fraction = np.nan
     return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
             "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
-            "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
+            "peak_hole_flux": np.abs(hole).max(axis=1) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
             "hole_exchange_fraction": float(np.sum(mirror * exchange)) / _trapz(np.abs(q), t),
             "stent_lumen_fraction": lumen_fraction,
@@ -500,11 +499,10 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     n = len(st.points)
     data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
     series = {k: np.full((n, t.size), np.nan) for k in SERIES}
-    hole_series, hole_z = np.full((n, t.size, n_hole), np.nan), np.full((n, n_hole), np.nan)
+    hole_series, hole_z = np.full((n, n_hole, t.size), np.nan), np.full((n, n_hole), np.nan)
     hole_axis, hole_side = np.full((n, n_hole), np.nan), np.full((n, n_hole), np.nan)
     for i, p in enumerate(st.points):
         r = runs[p.id]
-        flux = r["hole_flux"].transpose("time", "hole").values if "hole_flux" in r else None
         for k, v in point_scalars(r).items():
             data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
         rt = r["time"].values.astype(float)
@@ -513,13 +511,13 @@ def study_dataset(cfg: dict, name: str, paths: dict):
                 v = pressure_drop(r) if k == "pressure_drop" else r[k].values
                 series[k][i] = np.interp(t, rt, v, left=np.nan, right=np.nan)
         for j in range(r.sizes.get("hole", 0)):
-            hole_series[i, :, j] = np.interp(t, rt, flux[:, j], left=np.nan, right=np.nan)
+            hole_series[i, j] = np.interp(t, rt, r["hole_flux"].values[j], left=np.nan, right=np.nan)
             hole_z[i, j] = float(r["hole_z"].values[j])
             hole_side[i, j] = float(r["hole_side"].values[j])
             hole_axis[i, j] = float(r["hole_axis"].values[j]) if "hole_axis" in r else 1.0
     vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
-    vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
+    vars_["hole_flux"] = (("design", "hole", "time"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
     vars_ |= mesh_motion_variables(st.points, runs)
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),

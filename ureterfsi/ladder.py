@@ -51,12 +51,12 @@ def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
     else:
         t_ref, t_run = ref["time"].values, run["time"].values
         keep = (t_ref >= t_run[0] - 1e-9) & (t_ref <= t_run[-1] + 1e-9)     # the common time span
-        a = ref[name].transpose("time", ...).values[keep]
-        b = run[name].transpose("time", ...).values
+        a = ref[name].values[..., keep]          # time last (CF §2.4)
+        b = run[name].values
         if name == "hole_flux":
             i, j = _common_holes(ref, run)
-            a, b = a[:, i], b[:, j]
-            b = np.stack([np.interp(t_ref[keep], t_run, b[:, k]) for k in range(b.shape[1])], axis=1)
+            a, b = a[i], b[j]
+            b = np.stack([np.interp(t_ref[keep], t_run, bk) for bk in b])
         else:
             b = np.interp(t_ref[keep], t_run, b)
     scale = np.nanmax(np.abs(a))
