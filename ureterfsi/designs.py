@@ -6,8 +6,9 @@ one parameter with the others at the base) or a sample (``sobol`` or ``latin_hyp
 ``scipy.stats.qmc``, or ``saltelli``: SALib's Saltelli design of N (2 D + 2) rows for Sobol' indices; seeded,
 scaled to the bounds). A point is named by a stable id, the first 10 hex digits
 of the SHA-256 of its parameter values; its configuration is the base configuration with the point's
-overrides (``PARAMETERS``), validated by ``ureterfsi.config.validate_config`` like any configuration, so an
-impossible design is refused before any job starts, in one line naming the parameter.
+overrides (``PARAMETERS``), validated like any configuration (``ureterfsi.config.checks.check_config``: the
+schema, then the checks), so an impossible design is refused before any job starts, in one line naming the
+parameter.
 
 What a point recomputes follows from content-addressed identities: the mesh (``mesh_id``: geometry, mesh
 sizes, model row, level, symmetry) and, on the one-way rung, the r-z wall motion (``wall_id``:
@@ -40,9 +41,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
-from .config.validation import validate_config
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
 from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta
 
@@ -358,7 +359,7 @@ def expand_study(cfg: dict, name: str) -> Study:
         pcfg = apply(cfg, model, values)
         pcfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", pcfg["solver"]["one_way_mesh_motion"])
         try:
-            validate_config(pcfg)
+            check_config(pcfg)
         except ConfigError as err:
             raise ConfigError(_parameter_key(name, spec, _blame(values, err)),
                               f"point {pid} ({_values_text(values)}) cannot be posed: {err.key}: {err.constraint}") from None
