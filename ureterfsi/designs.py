@@ -29,6 +29,9 @@ it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.st
 Saltelli design adds the point of each sample row (``saltelli_point``: rows repeat, e.g. B_A1 = A_B2 for D = 2, and
 each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
 (``sobol_indices``, SALib.analyze.sobol).
+
+SALib and scipy.stats (~1 s to import) are imported where a sample is drawn or analysed: configuration validation
+imports this module.
 """
 from __future__ import annotations
 
@@ -40,12 +43,14 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import xarray as xr
 
 from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
 from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta
+from .provenance import provenance_attrs
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
@@ -485,10 +490,6 @@ def mesh_motion_variables(points, runs) -> dict:
 
 def study_dataset(cfg: dict, name: str, paths: dict):
     """Dataset of a study from its run files {point id: path} (see the module docstring)."""
-    import xarray as xr
-
-    from .provenance import provenance_attrs
-
     st = studies(cfg)[name]
     runs = {}
     for p in st.points:

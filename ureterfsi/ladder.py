@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .checked_io import RUN_FILE, open_netcdf
 from .metadata import attach, ladder_variables
 from .provenance import provenance_attrs
 
@@ -100,9 +101,6 @@ def recorded_error_agrees(recorded: float, measured: float) -> bool:
 def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
-    from .checked_io import open_netcdf
-    from .checked_io import RUN_FILE
-
     runs = {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
     ref = runs[lad["reference"]]
     names = list(runs)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import shlex
 import sys
 from datetime import datetime, timezone
+from importlib.metadata import version
 
 import numpy as np
 
@@ -349,8 +350,6 @@ def snakemake_version() -> str | None:
     if "snakemake" not in sys.modules:
         return None
     try:
-        from importlib.metadata import version
-
         return version("snakemake")
     except Exception:  # snakemake not installed in this interpreter
         return None
