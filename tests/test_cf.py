@@ -34,7 +34,7 @@ def cf_errors(path) -> tuple[int, int]:
 def test_encoding_follows_cf(tmp_path):
     ds = xr.Dataset({"cells": ("level", np.array([10, 20, 40], dtype=np.int64)),
                      "wall_time": ("level", [1.0, 2.0, np.nan]),
-                     "hole_flux": (("time", "hole"), np.arange(6.0).reshape(2, 3))},
+                     "hole_flux": (("hole", "time"), np.arange(6.0).reshape(3, 2))},
                     coords={"level": ("level", np.array(["coarse", "medium", "fine"], dtype=object)),
                             "time": ("time", [0.0, 1.0])})
     metadata.annotate(ds)
@@ -47,9 +47,11 @@ def test_encoding_follows_cf(tmp_path):
         assert nc.Conventions == "CF-1.8" and nc.title == "encoding test"
         assert "stented ureter" in nc.references and nc.history.split(": ", 1)[1]
         assert nc["hole_flux"].dimensions == ("hole", "time")          # CF §2.4: time right of the others
-    assert ds["hole_flux"].dims == ("time", "hole")                     # the dataset written is left as it was
     with xr.open_dataset(path, decode_times=False) as back:
-        np.testing.assert_array_equal(back["hole_flux"].transpose("time", "hole"), ds["hole_flux"])
+        np.testing.assert_array_equal(back["hole_flux"], ds["hole_flux"])
+    with pytest.raises(ValueError, match="'hole_flux'.*`time` last"):   # producers build time last
+        metadata.write_netcdf(ds.transpose("time", "hole", "level"), tmp_path / "y.nc")
+    assert not (tmp_path / "y.nc").exists()
     with pytest.raises(ValueError, match="'big'.*int32"):
         metadata.encoding(xr.Dataset({"big": ("n", np.array([2 ** 40]))}))
     with pytest.raises(KeyError, match="'unknown'"):

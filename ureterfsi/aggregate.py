@@ -64,14 +64,14 @@ def _run_attrs(prefix: str, attrs: dict) -> dict:
 
 
 def _interp(t_new: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Linear interpolation of y(t) (time along axis 0) onto t_new; NaN outside [t0, t1]."""
+    """Linear interpolation of y(t) (time along the last axis, CF §2.4) onto t_new; NaN outside [t0, t1]."""
     y = np.asarray(y, dtype=float)
-    flat = y.reshape(len(t), -1)
-    out = np.full((len(t_new), flat.shape[1]), np.nan)
+    flat = y.reshape(-1, len(t))
+    out = np.full((flat.shape[0], len(t_new)), np.nan)
     inside = (t_new >= t[0] - 10.0 ** -TIME_DECIMALS) & (t_new <= t[-1] + 10.0 ** -TIME_DECIMALS)
-    for j in range(flat.shape[1]):
-        out[inside, j] = np.interp(t_new[inside], t, flat[:, j])
-    return out.reshape((len(t_new),) + y.shape[1:])
+    for j in range(flat.shape[0]):
+        out[j, inside] = np.interp(t_new[inside], t, flat[j])
+    return out.reshape(y.shape[:-1] + (len(t_new),))
 
 
 def _clean_time(run: xr.Dataset) -> xr.Dataset:
@@ -149,17 +149,17 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
             r = runs[m]
             if v not in r:
                 continue
-            da = r[v]
+            da = r[v]                  # in the same dimension order in every run (one producer)
             if "probe_time" in dims:   # align probe times (a run may lack one, e.g. a shorter run)
                 pt = np.round(r["probe_time"].values.astype(float), TIME_DECIMALS)
                 idx = np.searchsorted(probe_t, pt)
-                vals = da.transpose(*dims).values.astype(float)
+                vals = da.values.astype(float)
                 sub = np.full((len(probe_t),) + vals.shape[1:], np.nan)
                 sub[idx] = vals
-            elif dims[0] == "time":
-                sub = _interp(t, r["time"].values, da.transpose(*dims).values)
+            elif "time" in dims:
+                sub = _interp(t, r["time"].values, da.values)
             else:
-                sub = da.transpose(*dims).values.astype(float)
+                sub = da.values.astype(float)
             if "hole_offset" in dims and not np.allclose(r["hole_offset"].values, hole_offset):
                 raise ValueError(f"run of model {m} has a different hole_offset grid")
             sl = tuple(slice(0, s) for s in sub.shape)

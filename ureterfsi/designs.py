@@ -6,8 +6,9 @@ one parameter with the others at the base) or a sample (``sobol`` or ``latin_hyp
 ``scipy.stats.qmc``, or ``saltelli``: SALib's Saltelli design of N (2 D + 2) rows for Sobol' indices; seeded,
 scaled to the bounds). A point is named by a stable id, the first 10 hex digits
 of the SHA-256 of its parameter values; its configuration is the base configuration with the point's
-overrides (``PARAMETERS``), validated by ``ureterfsi.config.validate_config`` like any configuration, so an
-impossible design is refused before any job starts, in one line naming the parameter.
+overrides (``PARAMETERS``), validated like any configuration (``ureterfsi.config.checks.check_config``: the
+schema, then the checks), so an impossible design is refused before any job starts, in one line naming the
+parameter.
 
 What a point recomputes follows from content-addressed identities: the mesh (``mesh_id``: geometry, mesh
 sizes, model row, level, symmetry) and, on the one-way rung, the r-z wall motion (``wall_id``:
@@ -28,6 +29,9 @@ it used (a study's ``one_way_mesh_motion: auto`` chooses per point, ureterfsi.st
 Saltelli design adds the point of each sample row (``saltelli_point``: rows repeat, e.g. B_A1 = A_B2 for D = 2, and
 each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
 (``sobol_indices``, SALib.analyze.sobol).
+
+SALib and scipy.stats (~1 s to import) are imported where a sample is drawn or analysed: configuration validation
+imports this module.
 """
 from __future__ import annotations
 
@@ -39,12 +43,14 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import xarray as xr
 
+from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
-from .config.validation import validate_config
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
 from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta
+from .provenance import provenance_attrs
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
@@ -358,7 +364,7 @@ def expand_study(cfg: dict, name: str) -> Study:
         pcfg = apply(cfg, model, values)
         pcfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", pcfg["solver"]["one_way_mesh_motion"])
         try:
-            validate_config(pcfg)
+            check_config(pcfg)
         except ConfigError as err:
             raise ConfigError(_parameter_key(name, spec, _blame(values, err)),
                               f"point {pid} ({_values_text(values)}) cannot be posed: {err.key}: {err.constraint}") from None
@@ -450,10 +456,9 @@ def point_scalars(run) -> dict:
     """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
     q = run["outlet_flux"].values.astype(float)
-    hole = (run["hole_flux"].transpose("time", "hole").values.astype(float) if "hole_flux" in run
-            else np.zeros((t.size, 0)))
+    hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((0, t.size))   # (hole, time)
     mirror = hole_mirror_weights(run)
-    exchange = np.array([_trapz(np.abs(hole[:, k]), t) for k in range(hole.shape[1])])
+    exchange = np.array([_trapz(np.abs(h), t) for h in hole])
     if "outlet_lumen_flux" in run:
         lumen = run["outlet_lumen_flux"].values.astype(float)
         inside, outside = _trapz(np.abs(lumen), t), _trapz(np.abs(q - lumen), t)
@@ -462,7 +467,7 @@ def point_scalars(run) -> dict:
         lumen_fraction = np.nan
     return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
             "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
-            "peak_hole_flux": np.abs(hole).max(axis=0) if hole.size else np.zeros(0),
+            "peak_hole_flux": np.abs(hole).max(axis=1) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
             "hole_exchange_fraction": float(np.sum(mirror * exchange)) / _trapz(np.abs(q), t),
             "stent_lumen_fraction": lumen_fraction,
@@ -488,10 +493,6 @@ def mesh_motion_variables(points, runs) -> dict:
 
 def study_dataset(cfg: dict, name: str, paths: dict):
     """Dataset of a study from its run files {point id: path} (see the module docstring)."""
-    import xarray as xr
-
-    from .provenance import provenance_attrs
-
     st = studies(cfg)[name]
     runs = {}
     for p in st.points:
@@ -503,11 +504,10 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     n = len(st.points)
     data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
     series = {k: np.full((n, t.size), np.nan) for k in SERIES}
-    hole_series, hole_z = np.full((n, t.size, n_hole), np.nan), np.full((n, n_hole), np.nan)
+    hole_series, hole_z = np.full((n, n_hole, t.size), np.nan), np.full((n, n_hole), np.nan)
     hole_axis, hole_side = np.full((n, n_hole), np.nan), np.full((n, n_hole), np.nan)
     for i, p in enumerate(st.points):
         r = runs[p.id]
-        flux = r["hole_flux"].transpose("time", "hole").values if "hole_flux" in r else None
         for k, v in point_scalars(r).items():
             data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
         rt = r["time"].values.astype(float)
@@ -516,13 +516,13 @@ def study_dataset(cfg: dict, name: str, paths: dict):
                 v = pressure_drop(r) if k == "pressure_drop" else r[k].values
                 series[k][i] = np.interp(t, rt, v, left=np.nan, right=np.nan)
         for j in range(r.sizes.get("hole", 0)):
-            hole_series[i, :, j] = np.interp(t, rt, flux[:, j], left=np.nan, right=np.nan)
+            hole_series[i, j] = np.interp(t, rt, r["hole_flux"].values[j], left=np.nan, right=np.nan)
             hole_z[i, j] = float(r["hole_z"].values[j])
             hole_side[i, j] = float(r["hole_side"].values[j])
             hole_axis[i, j] = float(r["hole_axis"].values[j]) if "hole_axis" in r else 1.0
     vars_ = {k: (("design", "hole") if v.ndim == 2 else ("design",), v) for k, v in data.items()}
     vars_ |= {k: (("design", "time"), v) for k, v in series.items()}
-    vars_["hole_flux"] = (("design", "time", "hole"), hole_series)
+    vars_["hole_flux"] = (("design", "hole", "time"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
     vars_ |= mesh_motion_variables(st.points, runs)
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .checked_io import RUN_FILE, open_netcdf
 from .metadata import attach, ladder_variables
 from .provenance import provenance_attrs
 
@@ -51,12 +52,12 @@ def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
     else:
         t_ref, t_run = ref["time"].values, run["time"].values
         keep = (t_ref >= t_run[0] - 1e-9) & (t_ref <= t_run[-1] + 1e-9)     # the common time span
-        a = ref[name].transpose("time", ...).values[keep]
-        b = run[name].transpose("time", ...).values
+        a = ref[name].values[..., keep]          # time last (CF §2.4)
+        b = run[name].values
         if name == "hole_flux":
             i, j = _common_holes(ref, run)
-            a, b = a[:, i], b[:, j]
-            b = np.stack([np.interp(t_ref[keep], t_run, b[:, k]) for k in range(b.shape[1])], axis=1)
+            a, b = a[i], b[j]
+            b = np.stack([np.interp(t_ref[keep], t_run, bk) for bk in b])
         else:
             b = np.interp(t_ref[keep], t_run, b)
     scale = np.nanmax(np.abs(a))
@@ -100,9 +101,6 @@ def recorded_error_agrees(recorded: float, measured: float) -> bool:
 def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
-    from .checked_io import open_netcdf
-    from .checked_io import RUN_FILE
-
     runs = {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
     ref = runs[lad["reference"]]
     names = list(runs)

@@ -17,6 +17,8 @@ import time
 
 import gmsh
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from ureterfsi import tags
 from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
@@ -344,9 +346,6 @@ def hole_channels(coords: np.ndarray, tris: np.ndarray, stent_offset: float = 0.
     wall's other in-plane coordinate (-a to a for a whole hole, 0 to a for one cut in half by a mirror plane);
     sorted by z, axis, sign.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     wall = _hole_wall_triangles(coords, tris, stent_offset)
     if not len(wall):
         return []
@@ -476,7 +475,7 @@ def load_mesh(msh_path, comm):
     dolfinx 0.5.2's gmshio.read_from_msh is broken (finalizes gmsh before building the mesh), so the
     file is merged here on rank 0 and handed to gmshio.model_to_mesh on every rank.
     """
-    from dolfinx.io import gmshio
+    from dolfinx.io import gmshio   # lazy: building a mesh (rule mesh) needs no dolfinx
 
     gdim, bad = None, None
     if comm.rank == 0:

@@ -8,14 +8,15 @@ CF 1.8: coordinate variables carry no `_FillValue` (§2.5.1); integers are writt
 int64 in the classic data types the checkers accept); the `time` axis is a CF time coordinate (§4.4):
 standard_name "time", units "s since <EPOCH>" and a calendar, the epoch standing for the start of the run
 (t = 0). Readers open with decode_times=False (ureterfsi.checked_io.open_netcdf), so time stays in seconds.
-Dimensions are written in the order CF §2.4 recommends: `time` right of every other dimension (readers select
-dimensions by name).
+Dimensions are in the order CF §2.4 recommends, `time` right of every other dimension: the producers build
+their arrays so and write_netcdf refuses any other order.
 """
 from __future__ import annotations
 
 import shlex
 import sys
 from datetime import datetime, timezone
+from importlib.metadata import version
 
 import numpy as np
 
@@ -352,8 +353,6 @@ def snakemake_version() -> str | None:
     if "snakemake" not in sys.modules:
         return None
     try:
-        from importlib.metadata import version
-
         return version("snakemake")
     except Exception:  # snakemake not installed in this interpreter
         return None
@@ -389,19 +388,20 @@ def encoding(ds) -> dict:
     return enc
 
 
-def cf_dimension_order(ds):
-    """`ds` with `time` moved right of every other dimension of each variable (CF §2.4: dimensions that are
-    not T, Z, Y or X lie left of them; the others here are indices such as `hole` or `model`)."""
-    for name, var in list(ds.variables.items()):
+def check_dimension_order(ds) -> None:
+    """Refuse a variable whose `time` dimension is not its last (CF §2.4: dimensions that are not T, Z, Y or X,
+    here indices such as `hole` or `model`, lie left of them): producers build time-last arrays."""
+    for name, var in ds.variables.items():
         if "time" in var.dims and var.dims[-1] != "time":
-            ds[name] = var.transpose(*(d for d in var.dims if d != "time"), "time")
-    return ds
+            raise ValueError(f"variable {name!r} has dimensions {var.dims}: CF §2.4 wants `time` last")
 
 
 def write_netcdf(ds, path, title: str | None = None) -> None:
     """Write `ds` as CF-1.8 netCDF atomically: global attributes (global_attrs; the dataset's own
-    title unless `title` is given), the CF dimension order and the CF encoding."""
-    ds = cf_dimension_order(ds.copy())
+    title unless `title` is given) and the CF encoding; a variable not in the CF dimension order is refused
+    (check_dimension_order)."""
+    check_dimension_order(ds)
+    ds = ds.copy()
     ds.attrs.update(global_attrs(title or str(ds.attrs.get("title", "ureterfsi dataset"))))
     standard_names(ds)
     with atomic_path(path) as tmp:

@@ -6,6 +6,8 @@ One function per figure; each returns a matplotlib Figure (Agg backend) in reada
 """
 from __future__ import annotations
 
+import csv
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -22,6 +24,8 @@ from matplotlib.patches import Patch  # noqa: E402
 from . import tags  # noqa: E402
 from .checked_io import Contract, read_json  # noqa: E402
 from .meshfile import read_msh  # noqa: E402
+from .provenance import atomic_path  # noqa: E402
+from .stability import AXES, AXIS_PARAMETER, format_value  # noqa: E402
 
 # Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
 # figures.hole_velocity_times) through wave_times() and hole_figures().
@@ -340,11 +344,6 @@ def table1(cfg: dict, sidecars) -> list[dict]:
 
 def write_table(rows: list[dict], csv_path=None, md_path=None) -> None:
     """Table 1 as CSV and Markdown, atomically."""
-    import csv
-    import io
-
-    from .provenance import atomic_path
-
     cols = list(rows[0])
     if csv_path:
         buf = io.StringIO()
@@ -410,8 +409,6 @@ def stability_map(ds: xr.Dataset):
     ring = baseline of the row's scene (r-z: the baseline case; 3D hole rows: the case on the study's own
     mesh), dashed line = stability.volume_tolerance. Right: kinetic energy vs time of the same cases
     (colour = parameter, black = baseline; a cross where a failed case stopped)."""
-    from .stability import AXES, AXIS_PARAMETER, format_value
-
     axes_present = [a for a in AXES if a in set(str(x) for x in ds["axis"].values)]
     n = max(len(axes_present), 1)
     fig, axs = plt.subplots(n, 2, figsize=(10.0, 1.95 * n + 0.9), squeeze=False,

@@ -1,6 +1,7 @@
 """Reading the run's field files (ureterfsi.fields: XDMF 3 + HDF5) without dolfinx, for figures and checks.
 
-HDF5 is read through netCDF4 (HDF5 files are netCDF-4 readable), so no second HDF5 binding is loaded.
+HDF5 is read through netCDF4 (HDF5 files are netCDF-4 readable), so no second HDF5 binding is loaded. matplotlib
+is imported by the two figure functions only: reading and sampling fields need none.
 """
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 
 import netCDF4
 import numpy as np
+from scipy.spatial import cKDTree
 
 from . import tags
 
@@ -95,8 +97,6 @@ def sample(fs: FieldSet, quantity: str, time: float, points: np.ndarray, current
     """Piecewise-linear values of a nodal quantity at `points` (m; NaN outside the part's cells, or outside
     the cells of the boolean mask `cells`). current: the points are in the current configuration x = X + u
     (the part's `displacement` at that time)."""
-    from scipy.spatial import cKDTree
-
     X = fs.points + (fs.values("displacement", time) if current else 0.0)
     vals = fs.values(quantity, time)
     conn = fs.cells if cells is None else fs.cells[cells]

@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib
 import json
 import os
 import subprocess
 import tempfile
 from datetime import datetime, timezone
+from importlib import metadata
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -42,10 +44,6 @@ def git_commit() -> str:
 
 def package_versions() -> dict:
     """Versions of the numerical stack that produced a result."""
-    import importlib
-
-    from importlib import metadata
-
     out = {}
     for name in ("ureterfsi", "dolfinx", "ufl", "ffcx", "petsc4py", "gmsh", "numpy", "xarray"):
         try:

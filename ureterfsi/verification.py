@@ -11,14 +11,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import gmsh
 import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx import mesh as dmesh
+from dolfinx.fem.petsc import NonlinearProblem
+from dolfinx.io import gmshio
+from dolfinx.nls.petsc import NewtonSolver
 from mpi4py import MPI
+from scipy.optimize import brentq
 
-from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, LinearElastic, MooneyRivlin,
-                           NewtonianFluid, OpenBoundary, Scene, SolidRegion, SurfaceLoad)
+from ureterfsi.fsi import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, LinearElastic, MonolithicFSI,
+                           MooneyRivlin, NewtonianFluid, OpenBoundary, Scene, SolidRegion, SurfaceLoad, physics)
+from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.tagging import tag_cells, tag_facets
 
 
@@ -96,8 +102,6 @@ def mooney_rivlin_tube_inner_radius(Ri, Ro, mat: MooneyRivlin, pressure=None, de
     on the deformed surface) or a radial `dead_load` p0 per reference area (P N = -p0 N on the inner
     surface). By symmetry the dead load stays radial, and per unit length p0 Ri dTheta = p ri dtheta,
     so it equals the follower pressure p = p0 Ri / ri; both are found by Brent's method."""
-    from scipy.optimize import brentq
-
     if (pressure is None) == (dead_load is None):
         raise ValueError("give exactly one of pressure, dead_load")
     if pressure is not None:
@@ -218,9 +222,6 @@ def annulus_axisymmetric_scene(a: Annulus, n):
 def _quadratic_tetrahedra(h):
     """The current gmsh model meshed at uniform size h with quadratic tetrahedra, as dolfinx (mesh, cell tags,
     facet tags)."""
-    import gmsh
-    from dolfinx.io import gmshio
-
     gmsh.option.setNumber("Mesh.MeshSizeMin", h)
     gmsh.option.setNumber("Mesh.MeshSizeMax", h)
     gmsh.model.mesh.generate(3)
@@ -232,8 +233,6 @@ def annulus_3d_scene(a: Annulus, h):
     """Short 3D annulus (gmsh OCC, second-order geometry), z along the axis; same conditions as the
     axisymmetric scene (no slip, transverse velocity zero on the end sections, displacement fixed).
     Facets: 1 inlet, 2 outlet, 3 r = R1, 4 r = R2."""
-    import gmsh
-
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -270,9 +269,6 @@ def annulus_3d_scene(a: Annulus, h):
 def quarter_annulus_mesh(Ri, Ro, h, order=2):
     """Quarter annulus Ri < r < Ro, x, y >= 0 (gmsh, curved second-order geometry).
     Facets: 1 inner arc, 2 outer arc, 3 x = 0 line, 4 y = 0 line; cells 1."""
-    import gmsh
-    from dolfinx.io import gmshio
-
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -353,12 +349,6 @@ def pure_displacement_tube_inner_radius(tube: Tube, h, p0, degree=1, order=2, lo
     """Contrast to the engine's mixed u-pi formulation: the same plane-strain tube and dead load solved in
     pure displacement form, W = W_iso + kappa/2 (J - 1)^2 with Lagrange-`degree` displacement (dolfinx
     Newton). With kappa/(C10 + C01) ~ 1e4 this locks: the returned inner radius is far too small."""
-    from dolfinx.fem.petsc import NonlinearProblem
-    from dolfinx.nls.petsc import NewtonSolver
-
-    from ureterfsi.fsi import physics
-    from ureterfsi.fsi.operators import Operators
-
     mesh, ct, ft = quarter_annulus_mesh(tube.Ri, tube.Ro, h, order)
     ops = Operators(mesh)
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
@@ -396,8 +386,6 @@ def pure_displacement_tube_inner_radius(tube: Tube, h, p0, degree=1, order=2, lo
 def annulus_3d_errors(a: Annulus, h, options=None):
     """Steady 3D annular Poiseuille on a gmsh mesh of size h: (tets, dofs, relative L2 error of v_z,
     relative flux error)."""
-    from ureterfsi.fsi import MonolithicFSI
-
     scene = annulus_3d_scene(a, h)
     pb = MonolithicFSI(scene, options)
     pb.solve_steady()
@@ -459,8 +447,6 @@ def confined_column_top_displacement(length, weight, mat: MooneyRivlin):
     at Y = 0, under a body force `weight` b per reference volume along +Y. Uniaxial strain F = diag(1, 1, lam(Y))
     for any isotropic law: dP/dY = -b, P(L) = 0 -> P(lam(Y)) = b (L - Y), and u(L) = int_0^L (lam - 1) dY
     (64-point Gauss-Legendre on the smooth integrand, Brent's method for lam)."""
-    from scipy.optimize import brentq
-
     xi, wq = np.polynomial.legendre.leggauss(64)
     Y = 0.5 * length * (xi + 1.0)
     lam = [brentq(lambda s, P=weight * (length - y): mooney_rivlin_uniaxial_strain_stress(s, mat) - P,
@@ -522,8 +508,6 @@ def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
     second-order geometry, size h) extruded by h into one layer of tetrahedra; u_x = v_x = 0 on x = 0,
     u_y = v_y = 0 on y = 0, u_z = v_z = 0 on both end faces, outer surface free, and on the inner surface a
     follower pressure p(t) (or the dead load P N = -p N). Facets: 1 inner, 2 outer, 3 x = 0, 4 y = 0, 5 ends."""
-    import gmsh
-
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)

@@ -21,7 +21,8 @@ syntax error is reported as ``file:line:column``.
     python -m ureterfsi.config check config/config.yaml [overlay.yaml ...]
 
 Modules by job: errors (ConfigError), reading (YAML files, --config values, deep_merge), schema (layer 1),
-plausible and checks (layer 2), validation (validate_config, load_config*), runs (run_sections, run_config,
+plausible and checks (layer 2; check_config: both layers, as each design point is validated), validation
+(validate_config: check_config, then the design studies; load_config*), runs (run_sections, run_config,
 wall_sections, unmakeable), cli (the command line).
 """
 from __future__ import annotations

@@ -1,13 +1,16 @@
-"""Cross-key consistency checks of a schema-valid configuration, per section, run in order (CHECKS)."""
+"""Cross-key consistency checks of a schema-valid configuration, per section, run in order (CHECKS), and
+check_config: the schema, then CHECKS."""
 from __future__ import annotations
 
 import math
 
 from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.plausibility import SHEAR_MODULUS
+from ureterfsi.stability.naming import Case
 
 from .errors import ConfigError, fmt
 from .plausible import check_plausible, implausible
+from .schema import validate_schema
 
 RTOL = 1e-9  # relative slack of the floating-point comparisons of exact design ratios (e.g. 0.5/0.125 = 4)
 
@@ -359,9 +362,6 @@ def check_stability(cfg):
     st = cfg.get("stability")
     if st is None:
         return
-    # lazy: stability.cases imports this module (a circle), and its package imports dolfinx
-    from ureterfsi.stability.cases import Case
-
     levels, models = cfg["mesh"]["levels"], cfg["models"]
     if st["level"] not in levels:
         raise ConfigError("stability.level", f"mesh level {st['level']!r} is not one of mesh.levels {list(levels)}")
@@ -406,3 +406,18 @@ CHECKS = (
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
     check_runs, check_ladder, check_figures, check_stability,
 )
+
+
+def check_config(cfg) -> None:
+    """Validate one configuration, its design studies aside (as each design point is validated): the schema,
+    then CHECKS in order; raise ConfigError on the first violation.
+
+    Normalises `cfg` in place first: strings in YAML 1.2 number syntax where the schema expects a number
+    become floats (PyYAML/Snakemake read ``5.0e4`` as a string), and missing optional keys get their schema
+    defaults (schema.validate_schema).
+    """
+    if not isinstance(cfg, dict):
+        raise ConfigError("<root>", f"must be a mapping, got {type(cfg).__name__}")
+    validate_schema(cfg)
+    for check in CHECKS:
+        check(cfg)

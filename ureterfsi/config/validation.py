@@ -3,29 +3,20 @@ from __future__ import annotations
 
 import copy
 
-from .checks import CHECKS
+from .. import designs
+from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml
-from .schema import REPO_ROOT, validate_schema
+from .schema import REPO_ROOT
 
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
 
 def validate_config(cfg: dict) -> None:
-    """Validate `cfg` (schema, then CHECKS, then its design studies); raise ConfigError on the first violation.
-
-    Normalises `cfg` in place first: strings in YAML 1.2 number syntax where the schema expects a number
-    become floats (PyYAML/Snakemake read ``5.0e4`` as a string), and missing optional keys get their schema
-    defaults (schema.validate_schema).
-    """
-    if not isinstance(cfg, dict):
-        raise ConfigError("<root>", f"must be a mapping, got {type(cfg).__name__}")
-    validate_schema(cfg)
-    for check in CHECKS:
-        check(cfg)
-    # lazy: designs validates each design point with validate_config (a circle)
-    from ureterfsi.designs import check_design_studies
-    check_design_studies(cfg)
+    """Validate `cfg` (schema, then CHECKS: checks.check_config; then its design studies); raise ConfigError on
+    the first violation."""
+    check_config(cfg)
+    designs.check_design_studies(cfg)
 
 
 def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> dict:

@@ -5,16 +5,17 @@ Each case changes one quantity of the configuration's baseline (config `stabilit
 the time and the place. Two scenes: the stent-free model in r-z, fully coupled (every axis but
 hole_elements), and a stented 3D quarter model solved one-way (hole_elements).
 
+naming    the cases' names (Case), plain data the configuration checks share
 cases     the axes as data, the cases of a configuration and the configuration of each
 limits    the limits and the StabilityLimit a case ends with
 observer  energies, volume balance and limits after every accepted step (an engine Observer; dolfinx)
 run       run_case: one case -> its dataset, the failure classified from the engine's exceptions and records
 dataset   the per-case scalars (CaseScalars), the per-case file, the combined matrix, its outcome table
 """
-from .cases import AXES, AXIS, AXIS_PARAMETER, SCENES, SYMMETRY, Axis, Case, case_by_name, case_setup, cases
-from .cases import format_value, settings
+from .cases import AXES, AXIS, AXIS_PARAMETER, SCENES, SYMMETRY, Axis, case_by_name, case_setup, cases, settings
 from .dataset import CASE_FILE, PER_STEP, SCALARS, SERIES, CaseScalars, combine, outcome_table, write_case
 from .limits import LIMITS, StabilityLimit
+from .naming import Case, format_value
 
 
 def __getattr__(name):

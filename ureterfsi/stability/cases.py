@@ -3,14 +3,14 @@ its value sets (docs/stability.md lists the axes and their units)."""
 from __future__ import annotations
 
 import math
-import re
 from copy import deepcopy
 from dataclasses import dataclass
 
-from ..config.checks import check_stability
+from ..config import checks   # the module, not its names: importing it runs this package (checks uses .naming)
 from ..config.reading import deep_merge
 from ..config.schema import schema_defaults
 from ..metadata import cf_meta
+from .naming import Case
 
 SYMMETRY = "axisymmetric"
 SCENES = {"rz": "r-z (axisymmetric), fully coupled monolithic ALE, P2-P2-P1-P0, BDF2",
@@ -52,27 +52,6 @@ AXIS = {
 # axis -> (units, long name, scale of the stability-map axis); parameter variable of the dataset per axis
 AXES = {k: (a.units, a.label, a.scale) for k, a in AXIS.items()}
 AXIS_PARAMETER = {k: a.parameter for k, a in AXIS.items()}
-
-
-@dataclass(frozen=True)
-class Case:
-    """One point of the matrix: `axis` (a key of AXES, or "baseline") set to `value` (SI units)."""
-    axis: str
-    value: float | str | None = None
-
-    @property
-    def name(self) -> str:
-        if self.axis == "baseline":
-            return "baseline"
-        return f"{self.axis}_{format_value(self.value)}"
-
-
-def format_value(value) -> str:
-    """Short file-name-safe label of a value: 0.001, 1e5, 2e-4, medium."""
-    if isinstance(value, str):
-        return value
-    text = f"{float(value):.3g}"
-    return re.sub(r"e([+-])0*(\d)", lambda m: "e" + ("-" if m.group(1) == "-" else "") + m.group(2), text)
 
 
 def settings(cfg: dict) -> dict:
@@ -146,7 +125,7 @@ def case_setup(cfg: dict, case: Case) -> dict:
             _set(c, axis.sets, value * (sum(_get(cfg, p) for p in axis.per) if axis.per else 1.0))
     elif case.axis != "baseline":
         raise ValueError(f"unknown stability axis {case.axis!r}; one of baseline, {', '.join(AXES)}")
-    check_stability(cfg)
+    checks.check_stability(cfg)
     u, f, p = c["ureter"], c["fluid"], c["peristalsis"]
     level = run["level"]
     params = {"time_step": run["dt"], "mesh_level": level, "bulk_ratio": u["bulk_modulus"] / (u["c10"] + u["c01"]),

@@ -23,9 +23,10 @@ from ..provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre, ureter_scene
 from ..study.oneway import fluid_problem, wall_history
 from ..study.options import solver_options
-from .cases import SCENES, Case, case_setup, format_value, settings
+from .cases import SCENES, case_setup, settings
 from .dataset import SERIES, CaseScalars
 from .limits import StabilityLimit
+from .naming import Case, format_value
 from .observer import StabilityObserver
 
 log = logging.getLogger("ureterfsi.stability")

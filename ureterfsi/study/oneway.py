@@ -102,12 +102,12 @@ class WallHistory:
     def to_dataset(self, cfg: dict) -> xr.Dataset:
         """CF-annotated dataset of the recorded motion, with provenance and the hash of the configuration
         sections the wall solve reads (`wall_config_hash`, checked by from_dataset)."""
-        ds = attach(xr.Dataset(
-            {"inner_radial_displacement": (("time", "z_inner"), np.asarray(self.inner_ur)),
-             "inner_axial_displacement": (("time", "z_inner"), np.asarray(self.inner_uz)),
-             "inner_radial_velocity": (("time", "z_inner"), np.asarray(self.inner_vr)),
-             "inner_axial_velocity": (("time", "z_inner"), np.asarray(self.inner_vz)),
-             "outer_radial_displacement": (("time", "z_outer"), np.asarray(self.outer_ur))},
+        ds = attach(xr.Dataset(      # rows are times; written time last (CF §2.4)
+            {"inner_radial_displacement": (("z_inner", "time"), np.asarray(self.inner_ur).T),
+             "inner_axial_displacement": (("z_inner", "time"), np.asarray(self.inner_uz).T),
+             "inner_radial_velocity": (("z_inner", "time"), np.asarray(self.inner_vr).T),
+             "inner_axial_velocity": (("z_inner", "time"), np.asarray(self.inner_vz).T),
+             "outer_radial_displacement": (("z_outer", "time"), np.asarray(self.outer_ur).T)},
             coords={"time": ("time", self.time), "z_inner": ("z_inner", self.z_inner),
                     "z_outer": ("z_outer", self.z_outer)}), WALL_MOTION_VARIABLES)
         ds.attrs.update(provenance_attrs(cfg, model="wall", fidelity="one_way", wall_solve_time_s=round(self.wall_time, 2),

@@ -252,7 +252,7 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
                               hole_z=_cf(xr.DataArray([h[0] for h in obs.holes], dims="hole"), "hole_z"),
                               hole_side=_cf(xr.DataArray([h[1] for h in obs.holes], dims="hole"), "hole_side"),
                               hole_axis=_cf(xr.DataArray([h[2] for h in obs.holes], dims="hole"), "hole_axis"))
-        ds["hole_flux"] = _cf(xr.DataArray(np.asarray(obs.series["hole_flux"]), dims=("time", "hole")), "hole_flux")
+        ds["hole_flux"] = _cf(xr.DataArray(np.asarray(obs.series["hole_flux"]).T, dims=("hole", "time")), "hole_flux")
         ds.attrs["outlet_hole_z"] = obs.outlet_hole_z
     steps = {"step_time": [r.time for r in records], "step_dt": [r.dt for r in records],
              "newton_iterations": [r.newton_iterations for r in records],
