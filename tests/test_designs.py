@@ -349,7 +349,7 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
     under = studies(load_config(copy.deepcopy(strict)))["gap5"].points[0]
     refused = snakemake(work, work / "cfg.yaml", "--cores", "2", "design_gap5", timeout=900)
     text = refused.stdout + refused.stderr
-    assert refused.returncode != 0 and "MeshMotionRefused" in text, text[-3000:]
+    assert refused.returncode != 0 and "Traceback" not in refused.stderr, text[-3000:]
     assert "rule design_mesh" not in text and "rule design_wall_motion" not in text
     line = next(ln for ln in text.splitlines() if f"design point gap5/{under.id} refused before the solve" in ln)
     print("thin gap, hole under, limit 0.6:", line)

@@ -37,7 +37,7 @@ from petsc4py import PETSc
 
 from .. import tags
 from ..fields import oneway_parts
-from ..fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings, physics
+from ..fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings, physics
 from ..fsi.operators import Operators
 from ..fsi.problem import MonolithicFSI, dirichlet_bcs
 from ..fsi.scene import DirichletCondition
@@ -256,7 +256,7 @@ def radial_blend(history: WallHistory, r_still: float, r_wall, axisymmetric: boo
     return field
 
 
-class MeshMotionRefused(RuntimeError):
+class MeshMotionRefused(SolveFailure):
     """Both ALE maps of a one-way urine solve are predicted to fall below solver.one_way_auto_min_jacobian over the
     recorded wall motion: the point is refused before the solve (rather than stopping mid-run, or running on a mesh
     squeezed at the place its results come from)."""

@@ -1,24 +1,29 @@
-"""Snakemake script of rule `design_solve`: one design point on its study's rung (ureterfsi.study.cli.solve)."""
+"""Snakemake script of rule `design_solve`: one design point on its study's rung (ureterfsi.study.cli.solve).
+A point that cannot be solved (refused before the solve, a step that fails, an inverted mesh) ends in one line
+naming the point, in the rule's log and in Snakemake's error report (ureterfsi.workflow_log.run_script)."""
 import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ureterfsi.designs import studies  # noqa: E402
-from ureterfsi.study.cli import configure_logging, solve  # noqa: E402
+from ureterfsi.fsi import SolveFailure  # noqa: E402
+from ureterfsi.study.cli import solve  # noqa: E402
 from ureterfsi.study.oneway import MeshMotionRefused  # noqa: E402
 from ureterfsi.study.options import RunSpec  # noqa: E402
+from ureterfsi.workflow_log import run_script  # noqa: E402
 
-w = snakemake.wildcards  # noqa: F821
-study = studies(snakemake.config)[w.design_study]  # noqa: F821
-with open(snakemake.log[0], "w") as log:  # noqa: F821
-    configure_logging(log)
+
+def main(smk):
+    w = smk.wildcards
+    study = studies(smk.config)[w.design_study]
     point = study.point(w.point)
-    spec = RunSpec(study.model, study.level, point.symmetry, snakemake.input.mesh)  # noqa: F821
+    spec = RunSpec(study.model, study.level, point.symmetry, smk.input.mesh)
     try:
-        solve(point.config, spec, study.rung, snakemake.output[0],  # noqa: F821
-              snakemake.params.checkpoint, snakemake.input.get("wall"))  # noqa: F821
+        solve(point.config, spec, study.rung, smk.output[0], smk.params.checkpoint, smk.input.get("wall"))
     except MeshMotionRefused as err:
-        # one line naming the point, in the log and in Snakemake's error report
-        line = f"design point {w.design_study}/{point.id} refused before the solve: {err}"
-        log.write(line + "\n")
-        raise MeshMotionRefused(line) from None
+        raise MeshMotionRefused(f"design point {w.design_study}/{point.id} refused before the solve: {err}") from None
+    except SolveFailure as err:
+        raise SolveFailure(f"design point {w.design_study}/{point.id} ({study.rung}) failed: {err}") from None
+
+
+run_script(snakemake, lambda: main(snakemake))  # noqa: F821
