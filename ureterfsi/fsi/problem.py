@@ -58,7 +58,9 @@ class SolverOptions:
     # One residual norm sums rows of different scales: the solid's stiffness rows outweigh the fluid's viscous
     # ones by ~1e8, so a contracting (modified) Newton can meet the residual test with the urine unconverged.
     newton_field_rtol: float | None = None
-    newton_increment_floor: float = 1e-14  # SI units: a field increment below it counts as converged (a field at rest)
+    # SI units: a field increment below it counts as converged. A field at rest is round-off: in a fluid at rest under
+    # a 5e4 Pa load eps * p h / mu ~ 1e-12 m/s; 1e-10 sits above that and below 1e-6 of a 0.1 mm/s flow.
+    newton_increment_floor: float = 1e-10
     newton_max_iterations: int = 15
     # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
     # "constant" previous state
