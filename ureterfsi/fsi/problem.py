@@ -659,7 +659,9 @@ class MonolithicFSI:
         """||dx_f||_inf and ||x_f||_inf per field of the update just made (reduced over ranks)."""
         dx, x = self.dx_vec.array_r, self.x.x.array
         local = np.array([[np.abs(a[d]).max(initial=0.0) for d in self._field_owned.values()] for a in (dx, x)])
-        inc, scale = self.comm.allreduce(local, op=MPI.MAX)
+        reduced = np.empty_like(local)
+        self.comm.Allreduce(local, reduced, op=MPI.MAX)
+        inc, scale = reduced
         self.field_increments = {f: (i, s) for f, i, s in zip(self._field_owned, inc.tolist(), scale.tolist())}
 
     def _fields_off(self, rtol: float | None) -> dict:
