@@ -295,7 +295,7 @@ class MonolithicFSI:
         for name in self.field_names:
             dofs = np.asarray(self.sub(name).collapse()[1])
             self._field_owned[name] = dofs[dofs < nloc]
-        self.field_increments = {}      # {field: ||dx_f||_inf / ||x_f||_inf} of the last Newton update
+        self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
@@ -413,12 +413,10 @@ class MonolithicFSI:
 
     def field_is(self, groups: dict) -> list:
         """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
-        nloc = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
         offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
         out = []
         for name, fields in groups.items():
-            dofs = np.concatenate([np.asarray(self.W.sub(self.index[f]).collapse()[1]) for f in fields])
-            dofs = np.sort(dofs[dofs < nloc]) + offset
+            dofs = np.sort(np.concatenate([self._field_owned[f] for f in fields])) + offset
             out.append((name, PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=self.comm)))
         return out
 
