@@ -3,7 +3,8 @@ from .jitlog import demote_compiler_logs
 from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, TimeSettings
 from .linear_solvers import BlockGaussSeidel
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
-from .problem import MonolithicFSI, NewtonDivergence, SolverOptions
+from .newton import NewtonDivergence
+from .problem import MonolithicFSI, SolverOptions
 from .scene import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, OpenBoundary, Scene, SolidRegion,
                     SurfaceLoad)
 

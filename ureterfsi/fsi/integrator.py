@@ -25,7 +25,8 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 
 from ..provenance import atomic_path
-from .problem import MonolithicFSI, NewtonDivergence
+from .newton import NewtonDivergence
+from .problem import MonolithicFSI
 from .progress import Progress
 
 log = logging.getLogger("ureterfsi.fsi")

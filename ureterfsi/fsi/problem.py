@@ -32,15 +32,13 @@ from .linear_solvers import (KRYLOV, MUMPS_WORKSPACE_PERCENT, BlockGaussSeidel, 
                              SchurFieldsplit, WholeSystemLU, direct_package)
 from .materials import LinearElastic, MooneyRivlin
 from .mesh_motion import Extension, PrescribedMap
+from .newton import Newton, NewtonDivergence
 from .operators import Operators
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
 
 FIELDS = ("velocity", "displacement", "pressure", "solid_pressure")
-# largest Eisenstat-Walker forcing term: the momentum rows dominate the residual norm, and a looser solve leaves
-# the kinematic rows' velocity off by more than the LU path's (docs/performance.md)
-ETA_MAX = 1e-3
 
 
 @dataclass
@@ -87,7 +85,7 @@ class SolverOptions:
     krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
     krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
     # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
-    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (MonolithicFSI._forcing)
+    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (newton.Newton._forcing)
     krylov_forcing: str = "fixed"
     # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
     # mesh blocks at the next fresh Jacobian
@@ -128,14 +126,6 @@ def forget_options(prefix: str) -> None:
     opts = PETSc.Options()
     for key in [k for k in opts.getAll() if k.startswith(prefix)]:
         opts.delValue(key)
-
-
-class NewtonDivergence(RuntimeError):
-    """Newton failed to converge (or produced a non-finite residual) in one step."""
-
-    def __init__(self, message, history):
-        super().__init__(message)
-        self.history = history
 
 
 class MonolithicFSI:
@@ -295,7 +285,7 @@ class MonolithicFSI:
         for name in self.field_names:
             dofs = np.asarray(self.sub(name).collapse()[1])
             self._field_owned[name] = dofs[dofs < nloc]
-        self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update
+        self.nonlinear_solver = Newton(opts, self.x, self.dx_vec, self._field_owned, self.comm)
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
@@ -628,92 +618,35 @@ class MonolithicFSI:
         self._jacobian_valid = False
         self.linear_solver.invalidate()
 
-    def _check_linear_solve(self, history):
-        """A failed factorisation (e.g. MUMPS out of workspace) leaves a useless update: say so."""
+    def _newton_correction(self, fresh: bool, rtol: float) -> str | None:
+        """dx_vec = J^-1 b to relative tolerance rtol, with a fresh Jacobian and factorisation if `fresh`; None, or
+        the message of a failed solve (e.g. MUMPS out of workspace: the Jacobian is then invalidated)."""
+        if fresh:
+            self._assemble_jacobian()
+            self.ksp.setOperators(self.A)
+            self.linear_solver.operator_changed()
+        t0 = _time.perf_counter()
+        self.linear_solver.solve(self.b, self.dx_vec, rtol)
         reason = self.ksp.getConvergedReason()
         if reason < 0:
             detail = self.linear_solver.failure_detail()
             self.invalidate_jacobian()
-            raise NewtonDivergence(f"linear solve failed (PETSc KSP reason {reason}){detail}", history)
+            return f"linear solve failed (PETSc KSP reason {reason}){detail}"
+        self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
+        self.counters["factorisations" if fresh else "reused_solves"] += 1
+        return None
 
-    def _forcing(self, history, r0) -> float:
-        """Relative tolerance of the next linear solve. "eisenstat_walker" (Eisenstat & Walker 1996, choice 2,
-        gamma = 0.9, alpha = 2, with their safeguard): eta_k = 0.9 (r_k / r_k-1)^2, at least 0.9 eta_k-1^2 when
-        that exceeds 0.1; at most ETA_MAX (ETA_MAX at a step's first iteration), and no smaller than needed to
-        reach Newton's tolerance from r_k (0.5 tol / r_k) nor than krylov_rtol."""
-        o = self.options
-        if o.krylov_forcing == "fixed":
-            return o.krylov_rtol
-        eta = ETA_MAX
-        if len(history) > 1:
-            eta = 0.9 * (history[-1] / history[-2]) ** 2
-            if 0.9 * self._eta ** 2 > 0.1:
-                eta = max(eta, 0.9 * self._eta ** 2)
-        target = max(o.newton_atol, o.newton_rtol * r0)
-        self._eta = min(ETA_MAX, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
-        return self._eta
-
-    def _measure_field_increments(self) -> None:
-        """||dx_f||_inf and ||x_f||_inf per field of the update just made (reduced over ranks)."""
-        dx, x = self.dx_vec.array_r, self.x.x.array
-        local = np.array([[np.abs(a[d]).max(initial=0.0) for d in self._field_owned.values()] for a in (dx, x)])
-        reduced = np.empty_like(local)
-        self.comm.Allreduce(local, reduced, op=MPI.MAX)
-        inc, scale = reduced
-        self.field_increments = {f: (i, s) for f, i, s in zip(self._field_owned, inc.tolist(), scale.tolist())}
-
-    def _fields_off(self, rtol: float | None) -> dict:
-        """{field: ||dx_f|| / ||x_f||} of the fields whose last increment exceeds rtol of their max norm and
-        the absolute newton_increment_floor (all of them before the first update)."""
-        if rtol is None:
-            return {}
-        if not self.field_increments:
-            return dict.fromkeys(self.field_names, math.inf)
-        floor = self.options.newton_increment_floor
-        return {f: i / max(s, 1e-300) for f, (i, s) in self.field_increments.items() if i > max(rtol * s, floor)}
+    @property
+    def field_increments(self) -> dict:
+        """{field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update."""
+        return self.nonlinear_solver.field_increments
 
     def newton(self):
-        """Solve R(x) = 0 for the current step. Returns (iterations, history of residual norms)."""
-        o = self.options
-        history = []
+        """Solve R(x) = 0 for the current step (newton.Newton). Returns (iterations, history of residual norms)."""
         self._reaction_ready = False
         fem_petsc.set_bc(self.x.vector, self.bcs)
         self.x.x.scatter_forward()
-        r0 = None
-        self.field_increments = {}
-        for it in range(o.newton_max_iterations + 1):
-            r = self._assemble_residual()
-            history.append(r)
-            if not math.isfinite(r):
-                raise NewtonDivergence(f"non-finite residual at Newton iteration {it}", history)
-            r0 = r if r0 is None else r0
-            small = r <= o.newton_atol or (it > 0 and r <= o.newton_rtol * r0)
-            if small and (it == 0 or not self._fields_off(o.newton_field_rtol)):
-                return it, history
-            if it == o.newton_max_iterations:
-                break
-            contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            fresh = not (o.reuse_jacobian and self._jacobian_current() and contraction < o.reuse_contraction)
-            if fresh:
-                self._assemble_jacobian()
-                self.ksp.setOperators(self.A)
-                self.linear_solver.operator_changed()
-            t0 = _time.perf_counter()
-            self.linear_solver.solve(self.b, self.dx_vec, self._forcing(history, r0))
-            self._check_linear_solve(history)
-            self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
-            self.counters["factorisations" if fresh else "reused_solves"] += 1
-            self.x.vector.axpy(-1.0, self.dx_vec)
-            self.x.x.scatter_forward()
-            self._measure_field_increments()
-            if not self._fields_off(o.newton_stol):
-                r = self._assemble_residual()
-                history.append(r)
-                if math.isfinite(r):
-                    return it + 1, history
-        off = ", ".join(f"{f} {r:.1e}" for f, r in self._fields_off(o.newton_field_rtol).items())
-        raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} Newton iterations"
-                               + (f" (last increment relative to the field: {off})" if off else ""), history)
+        return self.nonlinear_solver.solve(self._assemble_residual, self._jacobian_current, self._newton_correction)
 
     # ---------------------------------------------------------------------------------------
     def set_bdf(self, dt):
