@@ -28,6 +28,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics, sparsity
+from .ale_jacobian import ALEJacobian
 from .linear_solvers import (KRYLOV, MUMPS_WORKSPACE_PERCENT, BlockGaussSeidel, FlowBlockLU, LinearSolver,
                              SchurFieldsplit, WholeSystemLU, direct_package)
 from .materials import LinearElastic, MooneyRivlin
@@ -293,9 +294,8 @@ class MonolithicFSI:
         self.linear_solver = self._linear_solver(prefix)
         self.ksp.setFromOptions()
         self._jacobian_valid = False
-        self.min_jacobian_expr = None
-        if fluid_tags:
-            self._setup_ale_jacobian(u, fluid_tags)
+        # det(I + Grad u) at the fluid cells' vertices: the inversion guard
+        self.ale_jacobian = ALEJacobian(ops, u, self.cells(fluid_tags)) if fluid_tags else None
 
     # ---------------------------------------------------------------------------------------
     def sub(self, name):
@@ -524,45 +524,14 @@ class MonolithicFSI:
             motion.mismatch = mismatch
             self._update_bcs(self.time)
 
-    def _setup_ale_jacobian(self, u, fluid_tags):
-        """det F of the ALE map at the vertices of every fluid cell (DG1 interpolation)."""
-        Q = fem.FunctionSpace(self.mesh, ("DG", 1))
-        self._jac_fn = fem.Function(Q)
-        F = physics.deformation_gradient(self.ops, u)
-        J = ufl.det(F)
-        if self.ops.axisymmetric:
-            # The hoop stretch 1 + u_r/r is 0/0 = NaN at vertices on the axis (and NaN <= threshold is
-            # False, so the inversion guard never fired); use its limit 1 + du_r/dr there.
-            g = ufl.grad(u)
-            F_axis = ufl.as_tensor([[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])
-            J = ufl.conditional(ufl.gt(abs(self.ops.r), 1e-300), J, ufl.det(F_axis))
-        self.min_jacobian_expr = fem.Expression(J, Q.element.interpolation_points())
-        cells = self.cells(fluid_tags)
-        cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
-        self._jac_dofs = np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[cells].ravel())
-
     def min_ale_jacobian(self) -> float:
         """Minimum det(I + Grad u) over the fluid mesh (1 when undeformed, <= 0 when inverted)."""
-        if self.min_jacobian_expr is None:
-            return 1.0
-        self._jac_fn.interpolate(self.min_jacobian_expr)
-        local = self._jac_fn.x.array[self._jac_dofs].min() if self._jac_dofs.size else np.inf
-        return float(self.comm.allreduce(local, MPI.MIN))
+        return 1.0 if self.ale_jacobian is None else self.ale_jacobian.minimum()
 
     def min_ale_jacobian_at(self):
         """(minimum ALE Jacobian, reference coordinates (x, y, z) of its fluid vertex), reduced over ranks;
         a non-finite Jacobian counts as -inf (a scene without fluid: (1, NaN))."""
-        if self.min_jacobian_expr is None:
-            return 1.0, (math.nan,) * 3
-        self._jac_fn.interpolate(self.min_jacobian_expr)
-        vals = self._jac_fn.x.array[self._jac_dofs]
-        local = (math.inf, (math.nan,) * 3)
-        if vals.size:
-            bad = ~np.isfinite(vals)
-            i = int(np.argmax(bad)) if bad.any() else int(np.argmin(vals))
-            xyz = self._jac_fn.function_space.tabulate_dof_coordinates()[self._jac_dofs[i]]
-            local = (-math.inf if bad.any() else float(vals[i]), tuple(float(c) for c in xyz))
-        return min(self.comm.allgather(local), key=lambda item: item[0])
+        return (1.0, (math.nan,) * 3) if self.ale_jacobian is None else self.ale_jacobian.minimum_at()
 
     # ---------------------------------------------------------------------------------------
     def _assemble_residual(self):

@@ -38,6 +38,7 @@ from petsc4py import PETSc
 from .. import tags
 from ..fields import oneway_parts
 from ..fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings, physics
+from ..fsi.ale_jacobian import ALEJacobian
 from ..fsi.operators import Operators
 from ..fsi.problem import MonolithicFSI, dirichlet_bcs
 from ..fsi.scene import DirichletCondition
@@ -292,30 +293,16 @@ class MeshMotionChoice:
 
 def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> JacobianMinimum:
     """The minimum over `times` of det(I + Grad d), d set by fill(t) for each time, at the vertices of every cell of
-    d's mesh (DG1, as the solver's inversion guard; on the r-z axis the hoop stretch takes its limit 1 + du_r/dr)."""
+    d's mesh (fsi.ale_jacobian.ALEJacobian, the solver's inversion guard); the earliest time of a tie."""
     mesh = d.function_space.mesh
-    ops = Operators(mesh, axisymmetric)
-    F = physics.deformation_gradient(ops, d)
-    J = ufl.det(F)
-    if axisymmetric:
-        g = ufl.grad(d)
-        J = ufl.conditional(ufl.gt(abs(ops.r), 1e-300), J, ufl.det(ufl.as_tensor(
-            [[F[0, 0], 0.0, F[0, 2]], [0.0, 1.0 + g[0, 0], 0.0], [F[2, 0], 0.0, F[2, 2]]])))
-    Q = fem.FunctionSpace(mesh, ("DG", 1))
-    jac, expr = fem.Function(Q), fem.Expression(J, Q.element.interpolation_points())
-    n_local = Q.dofmap.index_map.size_local
-    xyz = Q.tabulate_dof_coordinates()
+    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+    jacobian = ALEJacobian(Operators(mesh, axisymmetric), d, cells)
     best = (math.inf, math.nan, (math.nan,) * 3)
     for t in times:
         fill(float(t))
-        jac.interpolate(expr)
-        vals = np.where(np.isfinite(jac.x.array[:n_local]), jac.x.array[:n_local], -math.inf)
-        local = (math.inf, float(t), (math.nan,) * 3)
-        if vals.size:
-            i = int(np.argmin(vals))
-            where = tuple(float(c) for c in xyz[i]) if not axisymmetric else (float(xyz[i, 0]), float(xyz[i, 1]), math.nan)
-            local = (float(vals[i]), float(t), where)
-        best = min([best] + mesh.comm.allgather(local), key=lambda item: item[0])
+        value, where = jacobian.minimum_at()
+        best = min(best, (value, float(t), (where[0], where[1], math.nan) if axisymmetric else where),
+                   key=lambda item: item[0])
     return JacobianMinimum(*best)
 
 
