@@ -76,7 +76,7 @@ class Newton:
         self._eta = min(ETA_MAX, max(eta, 0.5 * target / history[-1], o.krylov_rtol))
         return self._eta
 
-    def fields_off(self, rtol: float | None) -> dict:
+    def _fields_off(self, rtol: float | None) -> dict:
         """fields_off of the last update under rtol and the absolute SolverOptions.newton_increment_floor."""
         return fields_off(self.field_increments, self.field_dofs, rtol, self.options.newton_increment_floor)
 
@@ -104,7 +104,7 @@ class Newton:
                 raise NewtonDivergence(f"non-finite residual at Newton iteration {it}", history)
             r0 = r if r0 is None else r0
             small = r <= o.newton_atol or (it > 0 and r <= o.newton_rtol * r0)
-            if small and (it == 0 or not self.fields_off(o.newton_field_rtol)):
+            if small and (it == 0 or not self._fields_off(o.newton_field_rtol)):
                 return it, history
             if it == o.newton_max_iterations:
                 break
@@ -116,11 +116,11 @@ class Newton:
             x.vector.axpy(-1.0, dx)
             x.x.scatter_forward()
             self.field_increments = measure_field_increments(dx.array_r, x.x.array, self.field_dofs, self.comm)
-            if not self.fields_off(o.newton_stol):
+            if not self._fields_off(o.newton_stol):
                 r = residual()
                 history.append(r)
                 if math.isfinite(r):
                     return it + 1, history
-        off = ", ".join(f"{f} {r:.1e}" for f, r in self.fields_off(o.newton_field_rtol).items())
+        off = ", ".join(f"{f} {r:.1e}" for f, r in self._fields_off(o.newton_field_rtol).items())
         raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} Newton iterations"
                                + (f" (last increment relative to the field: {off})" if off else ""), history)

@@ -10,6 +10,7 @@ Rows that belong to no physics are pinned: pressure dofs owned only by solid cel
 dofs outside the Mooney-Rivlin cells. The mesh-motion rows of interface displacement dofs are removed,
 so the interface moves exactly with the solid kinematics (no mesh-motion pollution).
 Time: BDF2 with variable step (Backward Euler for the first step); steady mode switches d/dt off.
+Newton's method and its convergence tests: fsi.newton; the ALE Jacobian guard: fsi.ale_jacobian.
 """
 from __future__ import annotations
 
