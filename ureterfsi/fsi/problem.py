@@ -36,6 +36,7 @@ from .materials import LinearElastic, MooneyRivlin
 from .mesh_motion import Extension, PrescribedMap
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
+from .partitioned import PartitionedCoupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
@@ -97,6 +98,11 @@ class SolverOptions:
     # is a linear problem of its own (factorised once) solved before each step, and the Newton system
     # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
     mesh_motion_coupling: str = "monolithic"
+    # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
+    # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
+    coupling_scheme: str = "monolithic"
+    block_iterations: int = 1           # partitioned: updates of the solid and flow blocks per sweep, at most
+    anderson_depth: int = 5             # partitioned: sweeps mixed by Anderson acceleration (0: plain sweeps)
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
@@ -216,6 +222,7 @@ class MonolithicFSI:
             for ob in scene.open_boundaries:
                 R += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt,
                                                     phi, ds(tuple(ob.tags)))
+        R_flow = R                      # the rows of the urine alone (coupling_scheme "partitioned")
         for solid in scene.solids:
             mat, dxs = solid.material, dx(tuple(solid.tags))
             R += physics.solid_inertia_residual(ops, mat.density, dvdt, phi, dxs)
@@ -262,6 +269,8 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
+        if opts.coupling_scheme not in ("monolithic", "partitioned"):
+            raise ValueError(f"coupling_scheme 'monolithic' or 'partitioned', got {opts.coupling_scheme!r}")
         if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
             raise ValueError(f"krylov_forcing 'fixed' or 'eisenstat_walker', got {opts.krylov_forcing!r}")
         if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
@@ -294,6 +303,7 @@ class MonolithicFSI:
         self.ksp.setOperators(self.A)
         self.linear_solver = self._linear_solver(prefix)
         self.ksp.setFromOptions()
+        self.partitioned = self._partitioned(R_flow) if opts.coupling_scheme == "partitioned" else None
         self._jacobian_valid = False
         # det(I + Grad u) at the fluid cells' vertices: the inversion guard
         self.ale_jacobian = ALEJacobian(ops, u, self.cells(fluid_tags)) if fluid_tags else None
@@ -462,6 +472,20 @@ class MonolithicFSI:
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
+    def _partitioned(self, R_flow) -> PartitionedCoupling:
+        """The partitioned strategy, with its flow-block Jacobian: R_flow differentiated in the velocity and pressure
+        directions only (the trial function with its displacement and solid pressure components zero)."""
+        if self.segregated or not self.fluid_tags or not self.solid_tags:
+            raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
+                             "mesh_motion_coupling 'monolithic'")
+        trial, parts, offset = ufl.TrialFunction(self.W), [], 0
+        for name, element in zip(self.field_names, self.W.ufl_element().sub_elements()):
+            n = element.value_size()
+            parts += [trial[offset + i] if name in ("velocity", "pressure") else ufl.as_ufl(0.0) for i in range(n)]
+            offset += n
+        form = fem.form(ufl.derivative(R_flow, self.x, ufl.as_vector(parts)))
+        return PartitionedCoupling(self, form, self.options.block_iterations)
+
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
         return self.linear_solver.factor_matrix()
@@ -587,6 +611,8 @@ class MonolithicFSI:
         """Force a fresh Jacobian and factorisation (of every block) at the next Newton iteration."""
         self._jacobian_valid = False
         self.linear_solver.invalidate()
+        if self.partitioned is not None:
+            self.partitioned.invalidate()
 
     def _newton_correction(self, fresh: bool, rtol: float) -> str | None:
         """dx_vec = J^-1 b to relative tolerance rtol, with a fresh Jacobian and factorisation if `fresh`; None, or
@@ -608,14 +634,17 @@ class MonolithicFSI:
 
     @property
     def field_increments(self) -> dict:
-        """{field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update."""
-        return self.nonlinear_solver.field_increments
+        """{field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update (partitioned: of the last sweep)."""
+        return (self.partitioned or self.nonlinear_solver).field_increments
 
     def newton(self):
-        """Solve R(x) = 0 for the current step (newton.Newton). Returns (iterations, history of residual norms)."""
+        """Solve R(x) = 0 for the current step (newton.Newton, or the partitioned sweeps of coupling_scheme
+        "partitioned"). Returns (iterations, history of residual norms)."""
         self._reaction_ready = False
         fem_petsc.set_bc(self.x.vector, self.bcs)
         self.x.x.scatter_forward()
+        if self.partitioned is not None:
+            return self.partitioned.solve()
         return self.nonlinear_solver.solve(self._assemble_residual, self._jacobian_current, self._newton_correction)
 
     # ---------------------------------------------------------------------------------------

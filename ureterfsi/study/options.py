@@ -26,8 +26,8 @@ class RunSpec:
 
 
 def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
-    """The engine's options from `solver`; `fully_coupled`: the fully coupled rung's solve, whose linear solver is
-    `solver.fully_coupled_linear_solver`."""
+    """The engine's options from `solver`; `fully_coupled`: the fully coupled rung's solve, whose scheme and linear
+    solver are `solver.fully_coupled_scheme` and `solver.fully_coupled_linear_solver`."""
     s = cfg["solver"]
     return SolverOptions(mesh_motion=s["mesh_motion"], mesh_stiffening=s["mesh_stiffening"],
                          newton_rtol=s["newton_rtol"], newton_atol=s["newton_atol"],
@@ -37,7 +37,9 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
                          reuse_jacobian=s["reuse_jacobian"], reuse_contraction=s["reuse_contraction"],
                          mesh_motion_direct_max_unknowns=int(s["mesh_motion_direct_max_unknowns"]),
                          krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
-                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"])
+                         krylov_refactorise_iterations=s["krylov_refactorise_iterations"],
+                         coupling_scheme=s["fully_coupled_scheme"] if fully_coupled else "monolithic",
+                         anderson_depth=s["anderson_depth"], block_iterations=s["block_iterations"])
 
 
 def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",

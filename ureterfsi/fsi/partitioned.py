@@ -1,0 +1,256 @@
+"""Partitioned solution of the monolithic FSI residual (SolverOptions.coupling_scheme "partitioned").
+
+The same discrete problem as Newton on the whole system, R(x) = 0, solved by nonlinear block Gauss-Seidel sweeps
+over the splits of MonolithicFSI.coupled_splits (S solid with the interface velocity, M free fluid mesh
+displacement, F fluid velocity and pressure):
+
+    x_S <- x_S - A_SS^-1 R_S(x)      repeated (modified Newton on the solid rows; mesh and flow held),
+    x_M <- x_M - A_MM^-1 R_M(x)      once (the mesh extension is linear in x_M),
+    x_F <- x_F - A_FF^-1 R_F(x)      repeated (the urine in the mesh just moved),
+
+a Dirichlet-Neumann iteration: the wall moves the urine's boundary, the urine's traction loads the wall in the
+next sweep. A step has converged when the residual test of Newton holds and no field changed over the last
+sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
+and refreshed when its iteration contracts by less than reuse_contraction: A_SS from the whole Jacobian, A_MM the
+fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
+directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
+weak (the sweeps contract by ~3e-3 on the ureter) while Newton on the whole system applies every block's factor
+in each Krylov iteration of each Newton iteration (docs/performance.md).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .linear_solvers import SPLITS, mumps_options
+from .newton import NewtonDivergence, fields_off, measure_field_increments
+
+# the order of a sweep: the wall first (it drives the flow), then the mesh it moves, then the urine
+ORDER = SPLITS
+
+
+class BlockFactor:
+    """LU (MUMPS) of a diagonal block A[I, I] of a matrix, kept until `refresh`."""
+
+    def __init__(self, comm, prefix: str, workspace_percent: int):
+        self.ksp = PETSc.KSP().create(comm)
+        self.ksp.setOptionsPrefix(prefix)
+        o = PETSc.Options()
+        for key, value in ({"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+                           | mumps_options(workspace_percent)).items():
+            o[f"{prefix}{key}"] = value
+        self.ksp.setFromOptions()
+        self.block = None
+        self.rate = None                  # b0/dt of the Jacobian it was factorised from
+        self.factorisations = 0
+
+    def refresh(self, matrix: PETSc.Mat, index: PETSc.IS, rate: float) -> None:
+        """Factorise matrix[index, index]."""
+        self.block = matrix.createSubMatrix(index, index, submat=self.block)
+        self.ksp.setOperators(self.block)
+        self.ksp.getPC().setReusePreconditioner(False)
+        self.ksp.setUp()
+        self.rate = rate
+        self.factorisations += 1
+
+    def solve(self, b: PETSc.Vec, x: PETSc.Vec) -> str:
+        """x = A[I, I]^-1 b; returns why it failed ("" if it did not)."""
+        self.ksp.solve(b, x)
+        reason = self.ksp.getConvergedReason()
+        if reason >= 0:
+            return ""
+        f = self.ksp.getPC().getFactorMatrix()
+        return (f"LU failed (PETSc KSP reason {reason}; MUMPS INFOG(1) = {f.getMumpsInfog(1)}, "
+                f"INFOG(2) = {f.getMumpsInfog(2)}: -8/-9/-13 workspace or memory, -10 singular)")
+
+
+class PartitionedCoupling:
+    """The sweeps of the module docstring on `problem` (a MonolithicFSI of a coupled scene, monolithic mesh
+    motion). `flow_jacobian_form`: the derivative of the flow rows in the velocity and pressure directions;
+    `failure(message, history)`: the exception raised when a step does not converge.
+    `solve()` replaces the problem's Newton solve: returns (sweeps, residual norms at each sweep's start and
+    the last); counters (in problem.counters): sweeps, block solves and factorisations per split;
+    timings (problem.timings): each block's factorisation and solves, the flow Jacobian's assembly."""
+
+    def __init__(self, problem, flow_jacobian_form, block_iterations: int):
+        self.pb = pb = problem
+        self.flow_jacobian_form = flow_jacobian_form
+        self.block_iterations = int(block_iterations)
+        splits = pb.coupled_splits()
+        if any(pb.comm.allreduce(len(splits[n])) == 0 for n in ORDER):
+            sizes = {n: pb.comm.allreduce(len(splits[n])) for n in ORDER}
+            raise ValueError(f"coupling_scheme 'partitioned' needs non-empty splits {ORDER} (a scene with a fluid and "
+                             f"a solid region), got sizes {sizes}")
+        self.index = pb._split_is(splits)
+        self.sizes = {n: self.index[n].getSize() for n in ORDER}
+        prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
+        self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
+        # {split: {field: positions in the split's local array}} for the per-field increments of a block
+        self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
+                              for f, d in pb._field_owned.items()} for n in ORDER}
+        self.Af = pb.A.duplicate()
+        self.work = {n: pb.x.vector.getSubVector(self.index[n]).duplicate() for n in ORDER}
+        for n in ORDER:
+            pb.x.vector.restoreSubVector(self.index[n], pb.x.vector.getSubVector(self.index[n]))
+        self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
+        pb.counters |= {"sweeps": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
+        pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
+        pb.timings |= {"assemble_flow_jacobian": 0.0}
+
+    def invalidate(self) -> None:
+        """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator)."""
+        for n in ("solid", "flow"):
+            self.factors[n].rate = None
+
+    # ---------------------------------------------------------------------------------------
+    def refresh(self, name: str) -> None:
+        """Refactorise block `name` from a Jacobian at the current state (the flow block from its own form)."""
+        pb = self.pb
+        t0 = time.perf_counter()
+        rate = pb._rate()
+        if name == "flow":
+            self.Af.zeroEntries()
+            fem_petsc.assemble_matrix(self.Af, self.flow_jacobian_form, bcs=pb.bcs)
+            self.Af.assemble()
+            pb.timings["assemble_flow_jacobian"] += time.perf_counter() - t0
+            matrix = self.Af
+        else:
+            pb._assemble_jacobian()
+            matrix = pb.A
+        t1 = time.perf_counter()
+        self.factors[name].refresh(matrix, self.index[name], rate)
+        pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
+        pb.counters[f"{name}_factorisations"] += 1
+
+    def _current(self, name: str) -> bool:
+        rate = self.factors[name].rate
+        if rate is None:
+            return False
+        return name == "mesh" or math.isclose(rate, self.pb._rate(), rel_tol=1e-12)
+
+    def _block_increment(self, name: str, dx: np.ndarray, scale: dict) -> float:
+        """Largest ||dx_f||_inf / ||x_f||_inf over the fields of the block (increments below
+        newton_increment_floor count as zero), reduced over the ranks."""
+        local = np.array([np.abs(dx[p]).max(initial=0.0) for p in self.positions[name].values()])
+        inc = np.empty_like(local)
+        self.pb.comm.Allreduce(local, inc, op=MPI.MAX)
+        floor = self.pb.options.newton_increment_floor
+        return max((i / max(scale[f], 1e-300) for f, i in zip(self.positions[name], inc) if i > floor), default=0.0)
+
+    def _scales(self) -> dict:
+        x = self.pb.x.x.array
+        local = np.array([np.abs(x[d]).max(initial=0.0) for d in self.pb._field_owned.values()])
+        out = np.empty_like(local)
+        self.pb.comm.Allreduce(local, out, op=MPI.MAX)
+        return dict(zip(self.pb._field_owned, out.tolist()))
+
+    def _block(self, name: str, scale: dict, residual: float | None) -> None:
+        """Modified Newton on the rows of split `name` from the current state (at most block_iterations updates, one
+        for the linear mesh block); `residual`: the norm of the residual already assembled at it, if any."""
+        pb, o = self.pb, self.pb.options
+        index, dx = self.index[name], self.work[name]
+        iterations = 1 if name == "mesh" else self.block_iterations
+        previous = None
+        for k in range(iterations):
+            r = residual if residual is not None else pb._assemble_residual()
+            residual = None
+            if not math.isfinite(r):
+                raise NewtonDivergence(f"non-finite residual in the {name} block", [r])
+            rb = pb.b.getSubVector(index)
+            norm = rb.norm()
+            stale = previous is not None and norm > o.reuse_contraction * previous
+            if not self._current(name) or stale or not o.reuse_jacobian:
+                self.refresh(name)
+            t0 = time.perf_counter()
+            failed = self.factors[name].solve(rb, dx)
+            pb.b.restoreSubVector(index, rb)
+            if failed:
+                self.invalidate()
+                raise NewtonDivergence(f"{name} block: {failed}", [r])
+            pb.timings[f"{name}_solve"] += time.perf_counter() - t0
+            pb.counters[f"{name}_solves"] += 1
+            xb = pb.x.vector.getSubVector(index)
+            xb.axpy(-1.0, dx)
+            pb.x.vector.restoreSubVector(index, xb)
+            pb.x.x.scatter_forward()
+            previous = norm
+            if self._block_increment(name, dx.array_r, scale) <= (o.newton_field_rtol or o.newton_stol):
+                break
+
+    def _weights(self) -> np.ndarray:
+        """Per owned dof 1 / max(||x_f||_inf, newton_increment_floor / newton_field_rtol) of its field, at the current
+        state: Anderson's least squares in units relative to each field (a field at rest, whose values are round-off,
+        weighed as a 1e-4 SI one, not amplified)."""
+        pb, o = self.pb, self.pb.options
+        least = o.newton_increment_floor / (o.newton_field_rtol or o.newton_stol)
+        w = np.zeros(pb.x.vector.getLocalSize())
+        for f, s in self._scales().items():
+            w[pb._field_owned[f]] = 1.0 / max(s, least)
+        return w
+
+    def _anderson(self, xs: list, gs: list, w: np.ndarray) -> np.ndarray:
+        """Anderson mixing (Walker & Ni 2011, type II; IQN-ILS of Degroote et al. 2009 on the whole state) of the
+        fixed point x = G(x) from the owned parts of the last iterates x_i and G(x_i):
+        x+ = G(x_k) - sum_i gamma_i (G(x_i+1) - G(x_i)), gamma = argmin ||f_k - sum_i gamma_i (f_i+1 - f_i)||_w,
+        f = G(x) - x, the norm weighted by w (one Gram matrix reduced over the ranks)."""
+        f = [(g - x) * w for x, g in zip(xs, gs)]
+        dF = np.array([b - a for a, b in zip(f[:-1], f[1:])])
+        dG = np.array([b - a for a, b in zip(gs[:-1], gs[1:])])
+        local = np.concatenate([(dF @ dF.T).ravel(), dF @ f[-1]])
+        total = np.empty_like(local)
+        self.pb.comm.Allreduce(local, total, op=MPI.SUM)
+        m = len(dF)
+        gram, rhs = total[:m * m].reshape(m, m), total[m * m:]
+        gamma = np.linalg.lstsq(gram + 1e-14 * np.trace(gram) * np.eye(m), rhs, rcond=None)[0]
+        return gs[-1] - dG.T @ gamma
+
+    def _fields_off(self, rtol: float | None) -> dict:
+        return fields_off(self.field_increments, self.pb._field_owned, rtol, self.pb.options.newton_increment_floor)
+
+    def solve(self):
+        """Solve R(x) = 0 for the current step by sweeps, Anderson-mixed over the last anderson_depth of them.
+        Returns (sweeps, history of residual norms)."""
+        pb, o = self.pb, self.pb.options
+        self.field_increments = {}
+        r = r0 = pb._assemble_residual()
+        history = [r]
+        n = pb.x.vector.getLocalSize()                  # owned entries of the state
+        xs, gs = [], []
+        for sweep in range(o.newton_max_iterations):
+            if not math.isfinite(r):
+                raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)
+            before = pb.x.x.array[:n].copy()
+            scale = self._scales()
+            residual = r
+            for name in ORDER:
+                self._block(name, scale, residual)
+                residual = None
+            pb.counters["sweeps"] += 1
+            change = before - pb.x.x.array[:n]          # the sweep's, for the engine's per-field test
+            self.field_increments = measure_field_increments(change, pb.x.x.array, pb._field_owned, pb.comm)
+            assembled = not self._fields_off(o.newton_field_rtol)
+            if assembled:
+                r = pb._assemble_residual()
+                history.append(r)
+                if math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0):
+                    return sweep + 1, history
+            if o.anderson_depth:
+                xs.append(before)
+                gs.append(pb.x.x.array[:n].copy())
+                del xs[:-(o.anderson_depth + 1)], gs[:-(o.anderson_depth + 1)]
+                if len(xs) > 1:
+                    pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
+                    pb.x.x.scatter_forward()
+                    assembled = False
+            if not assembled:
+                r = pb._assemble_residual()
+                history.append(r)
+        off = ", ".join(f"{f} {v:.1e}" for f, v in self._fields_off(o.newton_field_rtol).items())
+        raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} block Gauss-Seidel sweeps"
+                          + (f" (last change relative to the field: {off})" if off else ""), history)
+
