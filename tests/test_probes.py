@@ -13,7 +13,7 @@ from dolfinx import fem, mesh as dmesh
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
-from ureterfsi.probes import CellField, PointProbe, assemble_scalar, von_mises
+from ureterfsi.probes import CellField, PointProbe, assemble_scalar, surface_line_points, von_mises
 
 COMM = MPI.COMM_WORLD
 
@@ -174,3 +174,43 @@ def test_end_face_pressure_mean_of_a_prescribed_field(c):
         assert val[f"{end}_area"] == pytest.approx(math.pi * (R_I + c * R_I**2) ** 2, rel=1e-12)
         assert val[f"{end}_pressure_integral"] / val[f"{end}_area"] == pytest.approx(a + b * z + e * r_mean,
                                                                                       rel=1e-12)
+
+
+@pytest.mark.parametrize("symmetry,fraction", [("quarter", 0.7), ("half", 0.7), ("full", 0.0), ("axisymmetric", 0.7)])
+def test_wall_line_lies_on_the_outer_facets(tmp_path, repo_root, symmetry, fraction):
+    """The wall probes' line (surface_line_points: the meridian y = 0, x > 0 on the mesh's own outer facets) on the
+    study's 10 mm coarse meshes of the unstented model: a point at every z, on R_o(z) (narrowed by a stricture) to the
+    facet chords, and the radial displacement read there is that of an interpolated u = a(z) e_r to the P2
+    interpolation error. The straight line x = R_o, y = 0 the fully coupled rung read before lies outside the wall
+    under a stricture (NaN, left out of its maximum) and, with no mesh edge on the meridian (the full mesh), everywhere."""
+    from ureterfsi import tags
+    from ureterfsi.config import load_config, load_config_files
+    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.mesh import build_mesh, load_mesh
+
+    mini = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg = load_config(mini, {"geometry": {"stricture_fraction": fraction, "stricture_length": 0.004,
+                                          "stricture_position": 0.005}})
+    geom, axisymmetric = UreterGeometry.from_config(cfg), symmetry == "axisymmetric"
+    build_mesh(cfg, "1", "coarse", symmetry, tmp_path / "m.msh", tmp_path / "m.json")
+    msh, _, ft = load_mesh(tmp_path / "m.msh", COMM)
+    z = np.linspace(0.0, geom.length, 201)
+    pts, cells = surface_line_points(msh, ft.find(tags.URETER_OUTER), z, axisymmetric)
+    probe = PointProbe(msh, pts[:, :msh.geometry.dim], cells)
+    assert np.all(probe.owner < COMM.size)                        # every point on a facet of some rank
+    a = lambda zz: 1e-4 * np.exp(-((zz - 0.004) / 0.0015) ** 2)  # noqa: E731  (peak on the stricture's flank)
+    u = fem.Function(fem.VectorFunctionSpace(msh, ("CG", 2)))
+    if axisymmetric:
+        u.interpolate(lambda x: np.vstack([a(x[1]), 0.0 * x[1]]))
+    else:
+        u.interpolate(lambda x: np.vstack([a(x[2]) * x[0] / np.hypot(x[0], x[1]),
+                                           a(x[2]) * x[1] / np.hypot(x[0], x[1]), 0.0 * x[2]]))
+    ur = probe(u)[:, 0]
+    assert np.abs(ur - a(z)).max() < 2e-3 * a(z).max()           # measured 4e-4 - 1.1e-3
+    np.testing.assert_allclose(pts[:, 0], geom.outer_radius(z), rtol=0, atol=0.02 * geom.ureter_inner_radius)
+    straight = pts.copy()
+    straight[:, 0] = geom.ureter_outer_radius
+    straight = PointProbe(msh, straight[:, :msh.geometry.dim])(u)
+    lost = np.isnan(straight[:, 0])
+    under = geom.radial_shift(z) < -1e-6 * geom.ureter_inner_radius
+    assert lost[under].all() and (lost.all() if symmetry == "full" else under.any())

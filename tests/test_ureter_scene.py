@@ -202,3 +202,37 @@ def test_study_model3_coarse_quarter_first_steps(tmp_path, repo_root):
     cfg, ds = _run(tmp_path, [repo_root / "config/config.yaml"], end=0.03)
     assert ds["max_wall_displacement"].values[-1] > 1e-5
     assert np.abs(ds["outlet_flux"].values).max() > 0
+
+
+def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_path, repo_root):
+    """Issue 13: the wall probes read the outer surface R_o(z) on both rungs. The unstented r-z model with the
+    thin-gap stricture (f = 0.7, 4 mm at 5 mm), fully coupled, 4 steps of 20 ms: its wall line is finite at every z
+    and equals the one-way rung's (the r-z wall alone, ureterfsi.study.oneway.RecordedWall, what that rung's probes
+    read), and so does max_wall_displacement, whose maximum lies under the stricture. The fully coupled rung read the
+    straight line R_o before: NaN under the stricture, left out of the maximum (on the 3D thin-gap point 3.9e-4 m
+    against the one-way rung's 5.3e-4 m, docs/stricture.md). The lines differ where the wall bends, by its
+    discretisation on each rung: wall elements of 0.25 mm here (half the coarse size), measured 3.1e-2 (at the
+    coarse 0.5 mm 5.0e-2; the r-z wall alone moves 2.8 % on the stricture's flank from its 4 cells across to 16),
+    within fig05's tolerance; max_wall_displacement 5.4e-3."""
+    from ureterfsi.geometry import UreterGeometry
+
+    over = tmp_path / "stricture.yaml"
+    over.write_text("geometry: {stricture_fraction: 0.7, stricture_length: 0.004, stricture_position: 0.005}\n"
+                    "mesh: {sizes: {ureter_wall: 2.5e-4}}\n")
+    cfg, ds = _run(tmp_path, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml", over],
+                   model="1", symmetry="axisymmetric")
+    geom, z, t = UreterGeometry.from_config(cfg), ds["z"].values, ds["time"].values
+    history = oneway.wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"])
+    recorded = oneway.RecordedWall(history, z)
+    line = ds["wall_radial_displacement"].values
+    assert np.all(np.isfinite(line))
+    one_way = np.stack([recorded.radial_displacement(tp) for tp in ds["probe_time"].values])
+    print("wall line: fully coupled against one-way", np.abs(line - one_way).max() / np.abs(one_way).max())
+    assert np.abs(line - one_way).max() < 5e-2 * np.abs(one_way).max()
+    peak = np.array([np.abs(recorded.radial_displacement(tk)).max() for tk in t])
+    coupled = ds["max_wall_displacement"].values
+    print("max_wall_displacement fully coupled", coupled, "one-way", peak)
+    assert np.abs(coupled - peak).max() < 1.5e-2 * peak.max()
+    under = np.abs(z[np.argmax(np.abs(line[-1]))] - geom.stricture.position) < 0.5 * geom.stricture.length
+    outside = np.abs(z - geom.stricture.position) >= 0.5 * geom.stricture.length
+    assert under and np.abs(line[-1][outside]).max() < 0.9 * coupled[-1]   # the old probe's maximum: too low

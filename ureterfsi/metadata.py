@@ -41,7 +41,8 @@ VARIABLES = {
     "mean_pressure_drop": ("Pa", "time mean over the run of the inlet minus outlet area-mean end-face pressure"),
     "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
     "fluid_volume": ("m3", "volume of the urine domain"),
-    "max_wall_displacement": ("m", "maximum radial displacement of the ureter outer wall along the probe line"),
+    "max_wall_displacement": ("m", "maximum over the wall probe line of |radial displacement| of the ureter outer wall "
+                                   "(reference outer surface R_o(z), narrowed by a stricture, meridian y = 0)"),
     "stent_max_von_mises": ("Pa", "maximum von Mises stress over the stent volume"),
     "stent_max_von_mises_x": ("m", "x of the maximum stent von Mises stress (reference configuration)"),
     "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
@@ -53,7 +54,8 @@ VARIABLES = {
                                    "ureter"),
     "stent_lumen_fraction": ("1", "share of the outlet flow passing inside the stent, integral |Q_out,lumen| dt over "
                                   "integral |Q_out,lumen| dt + integral |Q_out - Q_out,lumen| dt"),
-    "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall"),
+    "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall along the wall probe line "
+                                      "(reference outer surface R_o(z), narrowed by a stricture, meridian y = 0)"),
     "stent_von_mises_line": ("Pa", "von Mises stress along the stent probe line (r = 0.75 mm, plane y = 0)"),
     "hole_velocity_y": ("m s-1", "velocity component along the hole axis (y, or x for a rotated pair) across the "
                                  "outlet-most side hole"),
@@ -103,7 +105,8 @@ VARIABLES = {
     "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "
                                     "the volume through the outlet, integral |Q_out| dt"),
     "peak_stent_von_mises": ("Pa", "maximum over time and the stent of the von Mises stress"),
-    "peak_wall_displacement": ("m", "maximum over time of the ureter outer-wall radial displacement"),
+    "peak_wall_displacement": ("m", "maximum over time of max_wall_displacement, |radial displacement| of the ureter "
+                                    "outer wall along the wall probe line (reference outer surface R_o(z))"),
     "design": ("1", "design point id (hash of its parameter values)"),
     "point_id": ("1", "design point id (hash of its parameter values)"),
     "saltelli_point": ("1", "index along design of the point of each row of the Saltelli design (rows may repeat)"),

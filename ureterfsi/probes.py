@@ -33,20 +33,25 @@ class PointProbe:
     """Evaluate functions at fixed reference points; every rank gets the full result.
 
     Points outside the mesh give NaN. Points on a partition boundary are evaluated by the lowest
-    rank that holds a colliding cell.
+    rank that holds a colliding cell. `cells`: a local cell holding each point (-1: none on this rank) instead of
+    the collision search, whose tolerance misses points on a faceted boundary (surface_line_points).
     """
 
-    def __init__(self, mesh, points: np.ndarray):
+    def __init__(self, mesh, points: np.ndarray, cells: np.ndarray | None = None):
         pts = np.zeros((len(points), 3))
         pts[:, : np.asarray(points).shape[1]] = points
         self.points, self.comm = pts, mesh.comm
-        tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
-        candidates = geometry.compute_collisions(tree, pts)
-        colliding = geometry.compute_colliding_cells(mesh, candidates, pts)
+        if cells is None:
+            tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
+            candidates = geometry.compute_collisions(tree, pts)
+            colliding = geometry.compute_colliding_cells(mesh, candidates, pts)
+            links = [colliding.links(i) for i in range(len(pts))]
+        else:
+            links = [[c] if c >= 0 else [] for c in cells]
         n_local = mesh.topology.index_map(mesh.topology.dim).size_local
         self.local, self.cells = [], []
         for i in range(len(pts)):
-            owned = [c for c in colliding.links(i) if c < n_local]
+            owned = [c for c in links[i] if c < n_local]
             if owned:
                 self.local.append(i)
                 self.cells.append(owned[0])
@@ -69,6 +74,58 @@ class PointProbe:
         self.comm.Allreduce(out, total, op=MPI.SUM)
         total[self.owner == self.comm.size] = np.nan
         return total
+
+
+def surface_line_points(mesh, facets: np.ndarray, z: np.ndarray, axisymmetric: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(points, cells): where the meridian x > 0, y = 0 (3D; in r-z the surface itself) meets the faceted surface of
+    the local `facets` at each axial position z, and a local cell holding each point (-1: none on this rank).
+
+    The points lie on the mesh's own (straight-sided) facets, not on the curved reference surface they approximate:
+    a point on the curved surface lies outside the mesh where the facet chords cut inside it (up to 60 um on a
+    stricture's flank, 6 um around a cylinder with no mesh edge on the meridian: the 10 mm coarse meshes), where the
+    collision search finds no cell."""
+    tdim = mesh.topology.dim
+    for d in ((tdim - 1, tdim), (tdim - 1, 0), (tdim, 0)):
+        mesh.topology.create_connectivity(*d)
+    f2c, f2v, c2v = (mesh.topology.connectivity(*d) for d in ((tdim - 1, tdim), (tdim - 1, 0), (tdim, 0)))
+    x, cell_nodes = mesh.geometry.x, mesh.geometry.dofmap
+    # a facet's geometry nodes: its vertices' positions among its cell's (the first geometry nodes of a cell are
+    # its vertices, in the cell's vertex order)
+    nodes = [cell_nodes.links(f2c.links(f)[0])[[list(c2v.links(f2c.links(f)[0])).index(v) for v in f2v.links(f)]]
+             for f in facets]
+    zi, n_local = 1 if axisymmetric else 2, mesh.topology.index_map(tdim).size_local
+    tol = 1e-12 * max(float(np.abs(x).max()) if x.size else 1.0, 1e-300)
+    segments = []                                          # (z_a, r_a, z_b, r_b, cell)
+    for f, vs in zip(facets, nodes):
+        p = x[vs]
+        if axisymmetric:
+            cut = p[:, [0, 1]]
+        else:
+            y = np.where(np.abs(p[:, 1]) <= tol, 0.0, p[:, 1])
+            if y.min() > 0 or y.max() < 0 or p[:, 0].max() <= 0:
+                continue
+            cut = [p[i, [0, 2]] for i in range(len(p)) if y[i] == 0.0]
+            for i in range(len(p)):
+                j = (i + 1) % len(p)
+                if y[i] * y[j] < 0:
+                    cut.append((p[i] + y[i] / (y[i] - y[j]) * (p[j] - p[i]))[[0, 2]])
+            cut = np.asarray(cut).reshape(-1, 2)
+            cut = cut[cut[:, 0] > 0]
+            if not len(cut):
+                continue
+        a, b = cut[np.argmin(cut[:, 1])], cut[np.argmax(cut[:, 1])]
+        segments.append((a[1], a[0], b[1], b[0], f2c.links(f)[0]))
+    seg = np.asarray(segments, dtype=float).reshape(-1, 5)
+    pts, cells = np.zeros((len(z), 3)), np.full(len(z), -1, dtype=np.int32)
+    for k, zk in enumerate(np.asarray(z, dtype=float)):
+        hit = np.flatnonzero((seg[:, 0] <= zk + tol) & (zk <= seg[:, 2] + tol))
+        if not hit.size:
+            continue
+        owned = hit[seg[hit, 4] < n_local]                  # an owned cell where this rank has one
+        za, ra, zb, rb, c = seg[owned[0] if owned.size else hit[0]]
+        r = ra if zb == za else ra + (zk - za) / (zb - za) * (rb - ra)
+        pts[k, 0], pts[k, zi], cells[k] = r, zk, int(c)
+    return pts, cells
 
 
 class CellField:

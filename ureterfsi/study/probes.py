@@ -6,8 +6,9 @@ Probes (paper §3, Figs. 3-10, and beyond):
                von Mises stress over the stent and where it occurs, fluid volume, flux through every
                side hole, maximum wall displacement, Newton iterations;
   probe times  von Mises along the probe line (r = 0.75 mm from the stent axis, plane y = 0, away from the
-               holes), ureter outer-wall radial displacement vs z, velocity along the hole axis (y, or x
-               for a rotated pair) across the outlet-most hole at mid-wall radius.
+               holes), ureter outer-wall radial displacement vs z (the wall probe line: the reference outer
+               surface R_o(z) on the meridian y = 0, the same line on both rungs), velocity along the hole
+               axis (y, or x for a rotated pair) across the outlet-most hole at mid-wall radius.
 Every variable carries CF `units` and `long_name`; the dataset carries provenance.
 """
 from __future__ import annotations
@@ -29,7 +30,7 @@ from ..fsi.problem import MonolithicFSI
 from ..geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
 from ..metadata import cf_meta
 from ..probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
-                      inside_radius, von_mises)
+                      inside_radius, surface_line_points, von_mises)
 from ..provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre
 from .options import RunSpec
@@ -38,13 +39,19 @@ N_LINE, N_HOLE = 201, 21
 
 
 class CoupledWall:
-    """Ureter outer-wall radial displacement read from the coupled state (material points on the
-    outer surface, x = R_o, y = 0, or (r, z) = (R_o, z))."""
+    """Ureter outer-wall radial displacement read from the coupled state at the material points of the outer
+    surface on the meridian y = 0, x > 0 (or the r-z outer boundary) at each z: u_x (u_r) where the mesh's own
+    outer facets meet that line (ureterfsi.probes.surface_line_points), so on the surface R_o(z) a stricture
+    narrows, and in every symmetry (a half or full mesh need not have a mesh edge on that line)."""
 
-    def __init__(self, pb: MonolithicFSI, z: np.ndarray, outer_radius: float):
-        pts = (np.c_[np.full_like(z, outer_radius), z] if pb.scene.axisymmetric
-               else np.c_[np.full_like(z, outer_radius), np.zeros_like(z), z])
-        self.pb, self.probe = pb, PointProbe(pb.mesh, pts)
+    def __init__(self, pb: MonolithicFSI, z: np.ndarray):
+        pts, cells = surface_line_points(pb.mesh, pb.scene.facet_tags.find(tags.URETER_OUTER), z,
+                                         pb.scene.axisymmetric)
+        self.pb, self.probe = pb, PointProbe(pb.mesh, pts[:, :pb.mesh.geometry.dim], cells)
+        missing = np.flatnonzero(self.probe.owner == pb.comm.size)
+        if missing.size:
+            raise ValueError(f"{missing.size} of {len(z)} wall probe points (z = {z[missing[0]]:.6g} m, ...) meet no "
+                             f"outer-wall facet on the meridian y = 0, x > 0")
         self.displacement = fem.Function(pb.W.sub(pb.index["displacement"]).collapse()[0])
 
     def radial_displacement(self, time: float) -> np.ndarray:
@@ -104,7 +111,7 @@ class UreterProbes(Observer):
 
         z = np.linspace(0.0, g.length, N_LINE)
         self.z = z
-        self.wall = wall or CoupledWall(pb, z, g.ureter_outer_radius)
+        self.wall = wall or CoupledWall(pb, z)
         self.velocity = fem.Function(pb.W.sub(pb.index["velocity"]).collapse()[0])
 
         self.has_stent = model.stent and not self.axisymmetric
