@@ -91,7 +91,9 @@ def run_variant(args):
            "s_per_step": [r.wall_time for r in records], "newton": [r.newton_iterations for r in records],
            "krylov": krylov.per_step, "counters": dict(pb.counters), "timings": dict(pb.timings),
            "peak_gib": peak, "jacobian_entries": pb.A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]}
-    if pb.linear_solver.sizes is not None:
+    if pb.partitioned is not None:
+        out["splits"] = pb.partitioned.sizes
+    elif pb.linear_solver.sizes is not None:
         out["splits"] = pb.linear_solver.sizes
     if comm.rank == 0:
         np.savez(args.state, **fields)
@@ -128,11 +130,13 @@ def report(res, ref):
           f"busiest rank, {res['cpu_total_s'] / res['steps']:.2f} on all), "
           f"Newton {res['newton']}, Krylov {res['krylov']}, fresh Jacobians {c['factorisations']}, reused "
           f"{c['reused_solves']}" + (f", block factorisations {blocks}, splits {res['splits']}" if blocks else "")
+          + ("".join(f", {k} {c[k]}" for k in ("sweeps", "solid_solves", "mesh_solves", "flow_solves") if k in c))
           + f"; Jacobian entries {res['jacobian_entries']:.3g}, residuals {tm['assemble_residual']:.1f} s, "
           f"Jacobian assembly {tm['assemble_jacobian']:.1f} s, solves with a fresh Jacobian {tm['factorise']:.1f} s, "
           f"kept {tm['solve']:.1f} s"
           + "".join(f", {k} {tm[k]:.1f} s" for k in ("block_extraction", "solid_factorise", "mesh_factorise",
-                                                      "flow_factorise", "krylov") if k in tm)
+                                                      "flow_factorise", "krylov", "solid_solve", "flow_solve",
+                                                      "assemble_flow_jacobian") if k in tm)
           + f"; peak {res['peak_gib']:.2f} GiB; state vs first: {diff}", flush=True)
 
 
