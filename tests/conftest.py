@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import copy
+import gc
 from pathlib import Path
 
 import netCDF4  # noqa: F401  (before any dolfinx import: see ureterfsi/__init__.py)
@@ -11,6 +12,15 @@ import pytest
 from ureterfsi.config import load_config
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _collect_solvers():
+    """Collect each test module's garbage when it ends: problems hold PETSc matrices and MUMPS factors in
+    reference cycles (weakref finalizers, UFL forms) that Python's own collector, blind to their size, keeps
+    for long (the suite's process reached 13 GB without it)."""
+    yield
+    gc.collect()
 
 
 @pytest.fixture(scope="session")
