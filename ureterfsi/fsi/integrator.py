@@ -289,9 +289,11 @@ class TimeIntegrator:
             wall = _time.perf_counter() - tic
             self.records.append(StepRecord(step, pb.time, dt_try, its, history[-1], jmin, wall))
             progress.update(step, pb.time, dt_try, dt_try if attempt else min(s.dt, 2.0 * dt), _time.perf_counter())
-            krylov = getattr(pb, "counters", {}).get("krylov_iterations")
-            log.info("%s  t=%.5f s  dt=%.3e s  newton=%2d%s  residual=%.3e (from %.3e)  "
-                     "min J_ale=%.4f  %.2f s/step", progress.describe(), pb.time, dt_try, its,
+            counters = getattr(pb, "counters", {})
+            krylov = counters.get("krylov_iterations")
+            log.info("%s  t=%.5f s  dt=%.3e s  %s=%2d%s  residual=%.3e (from %.3e)  "
+                     "min J_ale=%.4f  %.2f s/step", progress.describe(), pb.time, dt_try,
+                     "sweeps" if "sweeps" in counters else "newton", its,
                      "" if krylov is None else f"  krylov={krylov - krylov0:3d}", history[-1],
                      history[0], jmin, wall)
             if jmin <= s.min_ale_jacobian:

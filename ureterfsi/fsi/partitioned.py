@@ -11,7 +11,7 @@ displacement, F fluid velocity and pressure):
 a Dirichlet-Neumann iteration: the wall moves the urine's boundary, the urine's traction loads the wall in the
 next sweep. A step has converged when the residual test of Newton holds and no field changed over the last
 sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
-and refreshed when its iteration contracts by less than reuse_contraction: A_SS from the whole Jacobian, A_MM the
+and refreshed when its iteration contracts by less than block_reuse_contraction: A_SS from the whole Jacobian, A_MM the
 fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
 directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
 weak (the sweeps contract by ~3e-3 on the ureter) while Newton on the whole system applies every block's factor
@@ -163,7 +163,7 @@ class PartitionedCoupling:
                 raise NewtonDivergence(f"non-finite residual in the {name} block", [r])
             rb = pb.b.getSubVector(index)
             norm = rb.norm()
-            stale = previous is not None and norm > o.reuse_contraction * previous
+            stale = previous is not None and norm > o.block_reuse_contraction * previous
             if not self._current(name) or stale or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()

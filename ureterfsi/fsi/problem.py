@@ -101,8 +101,11 @@ class SolverOptions:
     # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
     # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
     coupling_scheme: str = "monolithic"
-    block_iterations: int = 1           # partitioned: updates of the solid and flow blocks per sweep, at most
+    block_iterations: int = 3           # partitioned: updates of the solid and flow blocks per sweep, at most
     anderson_depth: int = 5             # partitioned: sweeps mixed by Anderson acceleration (0: plain sweeps)
+    # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
+    # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
+    block_reuse_contraction: float = 0.5
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
