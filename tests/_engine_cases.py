@@ -137,6 +137,28 @@ def tube_problem(comm=MPI.COMM_WORLD, options: SolverOptions | None = None, **me
     return MonolithicFSI(case.scene, options), case
 
 
+def tube_run(steps=4, dt=2e-3, **options):
+    """The tube from its steady state over `steps` steps of dt with SolverOptions(**options): (problem, iterations)."""
+    pb, _ = tube_problem(options=SolverOptions(**options))
+    pb.solve_steady()
+    return pb, [pb.step(dt)[0] for _ in range(steps)]
+
+
+def tube_reference():
+    """tube_run converged tightly by full Newton (whole-system LU): the discrete solution to ~1e-12."""
+    return tube_run(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20,
+                    newton_stol=1e-13, newton_max_iterations=40)[0]
+
+
+def field_errors(pb, ref) -> dict:
+    """max |x_f - ref_f| / max |ref_f| per field of two problems on the same mesh."""
+    out = {}
+    for f in pb.field_names:
+        dofs = np.asarray(pb.sub(f).collapse()[1])
+        out[f] = np.abs(pb.x.x.array[dofs] - ref.x.x.array[dofs]).max() / np.abs(ref.x.x.array[dofs]).max()
+    return out
+
+
 # --------------------------------------------------------------------------------------------
 class Quantities:
     """Parallel-safe quantities of interest of the tube problem (all values identical on all ranks)."""

@@ -7,40 +7,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _engine_cases import tube_problem
+from _engine_cases import field_errors, tube_problem, tube_reference, tube_run
 from ureterfsi.fsi import NewtonDivergence, SolverOptions
 
 CONFIG_TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10)
 
 
-def _run(steps=4, dt=2e-3, **options):
-    pb, _ = tube_problem(options=SolverOptions(**options))
-    pb.solve_steady()
-    its = [pb.step(dt)[0] for _ in range(steps)]
-    return pb, its
-
-
 @pytest.fixture(scope="module")
 def reference():
-    pb, _ = _run(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20,
-                 newton_stol=1e-13, newton_max_iterations=40)
-    return pb
-
-
-def _errors(pb, ref) -> dict:
-    """max |x_f - ref_f| / max |ref_f| per field."""
-    out = {}
-    for f in pb.field_names:
-        dofs = np.asarray(pb.sub(f).collapse()[1])
-        r = ref.x.x.array[dofs]
-        out[f] = np.abs(pb.x.x.array[dofs] - r).max() / np.abs(r).max()
-    return out
+    return tube_reference()
 
 
 @pytest.mark.parametrize("field_rtol", [1e-6, 1e-8])
 def test_modified_newton_converges_every_field(reference, field_rtol):
-    pb, its = _run(reuse_jacobian=True, newton_field_rtol=field_rtol, **CONFIG_TOL)
-    errors = _errors(pb, reference)
+    pb, its = tube_run(reuse_jacobian=True, newton_field_rtol=field_rtol, **CONFIG_TOL)
+    errors = field_errors(pb, reference)
     assert max(errors.values()) <= field_rtol, errors
     assert pb.counters["factorisations"] <= 3, pb.counters     # still a modified Newton: the factor is kept
 
@@ -48,8 +29,8 @@ def test_modified_newton_converges_every_field(reference, field_rtol):
 def test_the_residual_test_alone_leaves_the_velocity_off(reference):
     """The motivating case: at the same tolerances without the field test the velocity is > 1e-6 off (2.9e-6
     when measured) while the solid's displacement is converged to 1e-10."""
-    pb, _ = _run(reuse_jacobian=True, **CONFIG_TOL)
-    errors = _errors(pb, reference)
+    pb, _ = tube_run(reuse_jacobian=True, **CONFIG_TOL)
+    errors = field_errors(pb, reference)
     assert errors["velocity"] > 1e-6 and errors["displacement"] < 1e-8, errors
 
 
@@ -81,5 +62,5 @@ def test_the_result_does_not_depend_on_the_jacobian_history(tmp_path):
     test alone it did not (the default model 3 run after its first checkpoint, issue 16: 1.5e-4 in the hole
     velocity, docs/performance.md)."""
     with_ckpt, without = _checkpointed_and_not(tmp_path, newton_field_rtol=1e-6)
-    errors = _errors(with_ckpt, without)
+    errors = field_errors(with_ckpt, without)
     assert max(errors.values()) <= 1e-6, errors

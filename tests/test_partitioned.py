@@ -8,41 +8,23 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from _engine_cases import tube_case, tube_problem
+from _engine_cases import field_errors, tube_case, tube_problem, tube_reference, tube_run
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 
 
-def _run(steps=4, dt=2e-3, **options):
-    pb, _ = tube_problem(options=SolverOptions(**options))
-    pb.solve_steady()
-    its = [pb.step(dt)[0] for _ in range(steps)]
-    return pb, its
-
-
 @pytest.fixture(scope="module")
 def reference():
-    pb, _ = _run(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20,
-                 newton_stol=1e-13, newton_max_iterations=40)
-    return pb
-
-
-def _errors(pb, ref) -> dict:
-    """max |x_f - ref_f| / max |ref_f| per field."""
-    out = {}
-    for f in pb.field_names:
-        dofs = np.asarray(pb.sub(f).collapse()[1])
-        out[f] = np.abs(pb.x.x.array[dofs] - ref.x.x.array[dofs]).max() / np.abs(ref.x.x.array[dofs]).max()
-    return out
+    return tube_reference()
 
 
 @pytest.mark.parametrize("field_rtol", [1e-6, 1e-8])
 @pytest.mark.parametrize("block_iterations", [1, 3])
 def test_partitioned_reaches_the_monolithic_solution(reference, field_rtol, block_iterations):
-    pb, sweeps = _run(coupling_scheme="partitioned", newton_field_rtol=field_rtol, block_iterations=block_iterations,
-                      **TOL)
-    errors = _errors(pb, reference)
+    pb, sweeps = tube_run(coupling_scheme="partitioned", newton_field_rtol=field_rtol,
+                          block_iterations=block_iterations, **TOL)
+    errors = field_errors(pb, reference)
     assert max(errors.values()) <= field_rtol, errors
     assert max(sweeps) <= 8, sweeps
     c = pb.counters
@@ -53,11 +35,11 @@ def test_partitioned_reaches_the_monolithic_solution(reference, field_rtol, bloc
 def test_anderson_mixing_is_what_converges_the_strongly_coupled_tube(reference):
     """Plain Dirichlet-Neumann sweeps on the tube contract by ~0.6 (the urine's added mass on a soft wall): ~30
     sweeps a step; Anderson mixing over 5 sweeps needs 6."""
-    plain, sweeps_plain = _run(coupling_scheme="partitioned", newton_field_rtol=1e-6, anderson_depth=0,
-                               newton_max_iterations=60, **TOL)
-    mixed, sweeps_mixed = _run(coupling_scheme="partitioned", newton_field_rtol=1e-6, **TOL)
+    plain, sweeps_plain = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, anderson_depth=0,
+                                   newton_max_iterations=60, **TOL)
+    mixed, sweeps_mixed = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, **TOL)
     assert sum(sweeps_plain) >= 3 * sum(sweeps_mixed), (sweeps_plain, sweeps_mixed)
-    assert max(_errors(plain, reference).values()) <= 1e-6
+    assert max(field_errors(plain, reference).values()) <= 1e-6
 
 
 def test_the_flow_block_jacobian_is_the_jacobians_flow_block():
@@ -77,6 +59,23 @@ def test_the_flow_block_jacobian_is_the_jacobians_flow_block():
     diff = whole.copy()
     diff.axpy(-1.0, block, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     assert diff.norm() <= 1e-12 * whole.norm()
+
+
+def test_the_block_rows_are_the_residuals_rows():
+    """The urine's rows from their own form and the mesh's from the mesh-motion form are the whole residual's."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", **TOL))
+    pb.solve_steady()
+    pb.set_bdf(2e-3)
+    pb.t.value = 2e-3
+    rng = np.random.default_rng(2)
+    pb.x.x.array[:] += 1e-6 * rng.standard_normal(pb.x.x.array.size)
+    pb.x.x.scatter_forward()
+    _, b = pb.pose_newton_system(2e-3)
+    part = pb.partitioned
+    for name in ("flow", "mesh"):
+        rows, index = part.block_residual(name), part.index[name]
+        whole = b.getSubVector(index).array.copy()
+        assert np.abs(rows.getSubVector(index).array - whole).max() <= 1e-12 * np.abs(whole).max(), name
 
 
 def test_a_step_that_does_not_converge_names_the_fields():

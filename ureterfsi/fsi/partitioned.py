@@ -77,9 +77,9 @@ class PartitionedCoupling:
     the last); counters (in problem.counters): sweeps, block solves and factorisations per split;
     timings (problem.timings): each block's factorisation and solves, the flow Jacobian's assembly."""
 
-    def __init__(self, problem, flow_jacobian_form, block_iterations: int):
+    def __init__(self, problem, flow_residual_form, flow_jacobian_form, block_iterations: int):
         self.pb = pb = problem
-        self.flow_jacobian_form = flow_jacobian_form
+        self.flow_residual_form, self.flow_jacobian_form = flow_residual_form, flow_jacobian_form
         self.block_iterations = int(block_iterations)
         splits = pb.coupled_splits()
         if any(pb.comm.allreduce(len(splits[n])) == 0 for n in ORDER):
@@ -94,13 +94,16 @@ class PartitionedCoupling:
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
                               for f, d in pb._field_owned.items()} for n in ORDER}
         self.Af = pb.A.duplicate()
+        # the rows a block's iteration needs, assembled alone: the urine's from flow_residual_form, the mesh's from
+        # the (linear) mesh-motion form; the wall's rows take the whole residual (the urine's traction is in them)
+        self._row_vectors = {"flow": pb.b.duplicate(), "mesh": pb.bm.duplicate()}
         self.work = {n: pb.x.vector.getSubVector(self.index[n]).duplicate() for n in ORDER}
         for n in ORDER:
             pb.x.vector.restoreSubVector(self.index[n], pb.x.vector.getSubVector(self.index[n]))
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         pb.counters |= {"sweeps": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
-        pb.timings |= {"assemble_flow_jacobian": 0.0}
+        pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_block_rows": 0.0}
 
     def invalidate(self) -> None:
         """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator)."""
@@ -149,29 +152,47 @@ class PartitionedCoupling:
         self.pb.comm.Allreduce(local, out, op=MPI.MAX)
         return dict(zip(self.pb._field_owned, out.tolist()))
 
-    def _block(self, name: str, scale: dict, residual: float | None) -> None:
+    def block_residual(self, name: str) -> PETSc.Vec:
+        """A vector whose entries on split `name` are the residual's at the current state."""
+        pb = self.pb
+        if name == "solid":
+            pb._assemble_residual()
+            return pb.b
+        t0 = time.perf_counter()
+        vec = self._row_vectors[name]
+        with vec.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.assemble_vector(vec, self.flow_residual_form if name == "flow" else pb.mesh_form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if name == "flow":
+            fem_petsc.set_bc(vec, pb.bcs, pb.x.vector, -1.0)
+        pb.timings["assemble_block_rows"] += time.perf_counter() - t0
+        return vec
+
+    def _block(self, name: str, scale: dict, assembled: bool) -> None:
         """Modified Newton on the rows of split `name` from the current state (at most block_iterations updates, one
-        for the linear mesh block); `residual`: the norm of the residual already assembled at it, if any."""
+        for the linear mesh block); `assembled`: the whole residual at the current state is in problem.b."""
         pb, o = self.pb, self.pb.options
         index, dx = self.index[name], self.work[name]
         iterations = 1 if name == "mesh" else self.block_iterations
         previous = None
         for k in range(iterations):
-            r = residual if residual is not None else pb._assemble_residual()
-            residual = None
-            if not math.isfinite(r):
-                raise NewtonDivergence(f"non-finite residual in the {name} block", [r])
-            rb = pb.b.getSubVector(index)
+            vec = pb.b if assembled else self.block_residual(name)
+            assembled = False
+            rb = vec.getSubVector(index)
             norm = rb.norm()
+            if not math.isfinite(norm):
+                vec.restoreSubVector(index, rb)
+                raise NewtonDivergence(f"non-finite residual in the {name} block", [norm])
             stale = previous is not None and norm > o.block_reuse_contraction * previous
             if not self._current(name) or stale or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()
             failed = self.factors[name].solve(rb, dx)
-            pb.b.restoreSubVector(index, rb)
+            vec.restoreSubVector(index, rb)
             if failed:
                 self.invalidate()
-                raise NewtonDivergence(f"{name} block: {failed}", [r])
+                raise NewtonDivergence(f"{name} block: {failed}", [norm])
             pb.timings[f"{name}_solve"] += time.perf_counter() - t0
             pb.counters[f"{name}_solves"] += 1
             xb = pb.x.vector.getSubVector(index)
@@ -226,10 +247,8 @@ class PartitionedCoupling:
                 raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)
             before = pb.x.x.array[:n].copy()
             scale = self._scales()
-            residual = r
-            for name in ORDER:
-                self._block(name, scale, residual)
-                residual = None
+            for k, name in enumerate(ORDER):
+                self._block(name, scale, assembled=k == 0)
             pb.counters["sweeps"] += 1
             change = before - pb.x.x.array[:n]          # the sweep's, for the engine's per-field test
             self.field_increments = measure_field_increments(change, pb.x.x.array, pb._field_owned, pb.comm)

@@ -225,7 +225,9 @@ class MonolithicFSI:
             for ob in scene.open_boundaries:
                 R += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt,
                                                     phi, ds(tuple(ob.tags)))
-        R_flow = R                      # the rows of the urine alone (coupling_scheme "partitioned")
+        # every term but the solids' volume terms: the residual's rows of the urine exactly (coupling_scheme
+        # "partitioned"; a solid cell holds no dof of the urine's split)
+        R_flow = R
         for solid in scene.solids:
             mat, dxs = solid.material, dx(tuple(solid.tags))
             R += physics.solid_inertia_residual(ops, mat.density, dvdt, phi, dxs)
@@ -238,14 +240,15 @@ class MonolithicFSI:
             else:
                 raise TypeError(f"unsupported solid material {type(mat).__name__}")
         X_ref = ufl.SpatialCoordinate(mesh)
-        for load in scene.loads:
-            R += physics.surface_load_residual(ops, load.traction(X_ref, self.t, ops.normal()), phi,
-                                               ds(tuple(load.tags)))
-        for load in scene.pressure_loads:
-            traction = physics.follower_pressure_traction(ops, load.pressure(X_ref, self.t), u)
-            R += physics.surface_load_residual(ops, traction, phi, ds(tuple(load.tags)))
-        for load in scene.body_forces:
-            R += physics.body_force_residual(ops, load.force(X_ref, self.t), phi, dx(tuple(load.tags)))
+        loads = [physics.surface_load_residual(ops, load.traction(X_ref, self.t, ops.normal()), phi,
+                                               ds(tuple(load.tags))) for load in scene.loads]
+        loads += [physics.surface_load_residual(ops, physics.follower_pressure_traction(ops, load.pressure(X_ref, self.t), u),
+                                                phi, ds(tuple(load.tags))) for load in scene.pressure_loads]
+        loads += [physics.body_force_residual(ops, load.force(X_ref, self.t), phi, dx(tuple(load.tags)))
+                  for load in scene.body_forces]
+        for term in loads:
+            R += term
+            R_flow += term
         self.residual_form = fem.form(R)
         self.jacobian_form = fem.form(ufl.derivative(R, self.x))
 
@@ -476,8 +479,9 @@ class MonolithicFSI:
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
     def _partitioned(self, R_flow) -> PartitionedCoupling:
-        """The partitioned strategy, with its flow-block Jacobian: R_flow differentiated in the velocity and pressure
-        directions only (the trial function with its displacement and solid pressure components zero)."""
+        """The partitioned strategy, with the urine's rows R_flow and their Jacobian: R_flow differentiated in the
+        velocity and pressure directions only (the trial function with its displacement and solid pressure
+        components zero)."""
         if self.segregated or not self.fluid_tags or not self.solid_tags:
             raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
                              "mesh_motion_coupling 'monolithic'")
@@ -487,7 +491,7 @@ class MonolithicFSI:
             parts += [trial[offset + i] if name in ("velocity", "pressure") else ufl.as_ufl(0.0) for i in range(n)]
             offset += n
         form = fem.form(ufl.derivative(R_flow, self.x, ufl.as_vector(parts)))
-        return PartitionedCoupling(self, form, self.options.block_iterations)
+        return PartitionedCoupling(self, fem.form(R_flow), form, self.options.block_iterations)
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
