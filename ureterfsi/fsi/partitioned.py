@@ -71,8 +71,8 @@ class BlockFactor:
 
 class PartitionedCoupling:
     """The sweeps of the module docstring on `problem` (a MonolithicFSI of a coupled scene, monolithic mesh
-    motion). `flow_jacobian_form`: the derivative of the flow rows in the velocity and pressure directions;
-    `failure(message, history)`: the exception raised when a step does not converge.
+    motion). `flow_residual_form`: every term of the residual but the solids' volume terms (its rows of the urine
+    split are the residual's); `flow_jacobian_form`: its derivative in the velocity and pressure directions.
     `solve()` replaces the problem's Newton solve: returns (sweeps, residual norms at each sweep's start and
     the last); counters (in problem.counters): sweeps, block solves and factorisations per split;
     timings (problem.timings): each block's factorisation and solves, the flow Jacobian's assembly."""
