@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import ufl  # noqa: E402
 
-from ureterfsi import verification as V  # noqa: E402
+from ureterfsi.scenes import verification as V  # noqa: E402
 from ureterfsi.fsi import MonolithicFSI, SolverOptions  # noqa: E402
 
 TIGHT = SolverOptions(newton_rtol=1e-11, newton_atol=1e-13)

@@ -228,7 +228,7 @@ def test_solver_options_go_with_their_problem():
     hundreds of problems in one): each problem's options live under its prefix and are removed with it."""
     import gc
 
-    from ureterfsi import verification as V
+    from ureterfsi.scenes import verification as V
     from ureterfsi.fsi import MonolithicFSI
     gc.collect()
     base = set(PETSc.Options().getAll())

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import ufl
 
-from ureterfsi import verification as V
+from ureterfsi.scenes import verification as V
 from ureterfsi.fsi import (BodyForce, FollowerPressure, LinearElastic, MonolithicFSI, MooneyRivlin, Scene,
                            SolverOptions)
 

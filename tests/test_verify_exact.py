@@ -17,7 +17,7 @@ import pytest
 import ufl
 from dolfinx import fem
 
-from ureterfsi import verification as V
+from ureterfsi.scenes import verification as V
 from ureterfsi.fsi import MonolithicFSI, MooneyRivlin, SolverOptions
 
 TIGHT = SolverOptions(newton_rtol=1e-11, newton_atol=1e-13)

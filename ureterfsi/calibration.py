@@ -40,7 +40,7 @@ from ureterfsi.config import DEFAULT_CONFIG, load_config_files
 from ureterfsi.fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
 from ureterfsi.provenance import provenance_attrs, write_json
 from ureterfsi.scenes.wall_rz import WallModel, wall_material, wall_radii
-from ureterfsi.verification import mooney_rivlin_tube_pressure
+from ureterfsi.scenes.verification import mooney_rivlin_tube_pressure
 
 
 # ------------------------------------------------------------------------------------------------
@@ -52,7 +52,7 @@ def plane_strain_outer_radius(Ri, Ro, mat, outer_dead_load) -> tuple[float, floa
 
     Incompressibility: r^2 = R^2 + a, a = r_i^2 - R_i^2. Radial equilibrium gives
     sigma_r(r_o) - sigma_r(r_i) = int (sigma_t - sigma_r) dr / r, which is
-    ureterfsi.verification.mooney_rivlin_tube_pressure(r_i); here sigma_r(r_i) = 0 and the Cauchy traction
+    ureterfsi.scenes.verification.mooney_rivlin_tube_pressure(r_i); here sigma_r(r_i) = 0 and the Cauchy traction
     on the deformed outer surface is p0 R_o / r_o (force per unit length p0 R_o dTheta = sigma_r r_o dtheta)."""
     def ro_of(ri):
         return math.sqrt(Ro**2 + ri**2 - Ri**2)

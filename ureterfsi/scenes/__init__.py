@@ -1,6 +1,8 @@
 """Scenes posed to the generic FSI engine (ureterfsi.fsi).
 
-ureter      the stented ureter (paper §2), and the urine alone of the one-way rung
-wall_rz     the ureter wall alone in r-z: the calibration's and the one-way rung's wall step
-turek_hron  the Turek-Hron FSI1-3 benchmarks
+ureter        the stented ureter (paper §2), and the urine alone of the one-way rung
+wall_rz       the ureter wall alone in r-z: the calibration's and the one-way rung's wall step
+turek_hron    the Turek-Hron FSI1-3 benchmarks
+verification  the problems with exact solutions (Poiseuille annulus, Mooney-Rivlin tube, hanging bar, confined
+              column), their error norms and observed orders
 """

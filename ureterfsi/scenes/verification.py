@@ -1,4 +1,6 @@
-"""Verification helpers shared by tests/test_verify_exact.py and benchmarks/convergence.py.
+"""The verification scenes: problems with exact solutions that the engine is checked against
+(tests/test_verify_exact.py, tests/test_solid_loads.py, benchmarks/convergence.py; the calibration uses the
+tube's exact pressure).
 
 Exact solutions (annular Poiseuille flow, plane-strain inflation of an incompressible five-parameter
 Mooney-Rivlin tube, a bar and a confined column under their own weight), error norms, observed orders of
