@@ -123,10 +123,6 @@ STENT = LinearElastic(youngs_modulus=4.22e6, poisson_ratio=0.058, density=1261.1
 REFERENCE_PRESSURE = 130.0
 
 
-def _near(a, b, tol):
-    return lambda x: np.isclose(a(x), b, atol=tol)
-
-
 # ------------------------------------------------------------------------------------------------
 # scenes
 # ------------------------------------------------------------------------------------------------
