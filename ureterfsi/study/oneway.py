@@ -291,27 +291,33 @@ class MeshMotionChoice:
     extension: JacobianMinimum = NO_MINIMUM
 
 
-def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> JacobianMinimum:
-    """The minimum over `times` of det(I + Grad d), d set by fill(t) for each time, at the vertices of every cell of
-    d's mesh (fsi.ale_jacobian.ALEJacobian, the solver's inversion guard); the earliest time of a tie."""
-    mesh = d.function_space.mesh
-    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
-    jacobian = ALEJacobian(Operators(mesh, axisymmetric), d, cells)
+def _earliest_minimum(minimum_at, fill, times, axisymmetric: bool) -> JacobianMinimum:
+    """The smallest minimum_at() -> (J, (x, y, z)) after fill(t) for each of `times`; the earliest time of a tie."""
     best = (math.inf, math.nan, (math.nan,) * 3)
     for t in times:
         fill(float(t))
-        value, where = jacobian.minimum_at()
+        value, where = minimum_at()
         best = min(best, (value, float(t), (where[0], where[1], math.nan) if axisymmetric else where),
                    key=lambda item: item[0])
     return JacobianMinimum(*best)
 
 
+def map_min_jacobian(d: fem.Function, fill, times, axisymmetric: bool) -> JacobianMinimum:
+    """The minimum over `times` of det(I + Grad d), d set by fill(t) for each time, at the vertices of every cell of
+    d's mesh (fsi.ale_jacobian.ALEJacobian, the solver's inversion guard); the earliest time of a tie."""
+    mesh = d.function_space.mesh
+    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+    return _earliest_minimum(ALEJacobian(Operators(mesh, axisymmetric), d, cells).minimum_at, fill, times,
+                             axisymmetric)
+
+
 def predicted_min_jacobian(pb: MonolithicFSI, times, axisymmetric: bool) -> JacobianMinimum:
     """map_min_jacobian of the segregated mesh motion of `pb` at `times` before its run: the prescribed map with the
     Dirichlet values set on top, or the extension solved from them (a linear problem given the recorded wall motion;
-    its LU factor is the run's), i.e. the run's own map at those times."""
+    its LU factor is the run's), i.e. the run's own map at those times, measured by the run's own inversion guard
+    (pb.min_ale_jacobian_at: every cell of the fluid-alone problem is a fluid cell)."""
     with pb.mesh_motion_preview() as at:
-        return map_min_jacobian(pb.mesh_displacement, at, times, axisymmetric)
+        return _earliest_minimum(pb.min_ale_jacobian_at, at, times, axisymmetric)
 
 
 def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, axisymmetric: bool):
