@@ -55,12 +55,10 @@ class SolverOptions:
     newton_atol: float = 1e-10          # absolute residual norm
     # stagnation exit: every field's Newton increment below this fraction of the field's max norm
     newton_stol: float = 1e-11
-    # converged also needs every field's last increment <= this fraction of its max norm (None: residual alone).
-    # One residual norm sums rows of different scales: the solid's stiffness rows outweigh the fluid's viscous
-    # ones by ~1e8, so a contracting (modified) Newton can meet the residual test with the urine unconverged.
+    # converged also needs every field's last increment <= this fraction of its max norm (None: residual alone):
+    # one residual norm mixes rows of different scales, where a solid's stiff rows can hide an unconverged fluid
     newton_field_rtol: float | None = None
-    # SI units: a field increment below it counts as converged. A field at rest is round-off: in a fluid at rest under
-    # a 5e4 Pa load eps * p h / mu ~ 1e-12 m/s; 1e-10 sits above that and below 1e-6 of a 0.1 mm/s flow.
+    # SI units: a field increment below it counts as converged (a field at rest holds round-off, no scale of its own)
     newton_increment_floor: float = 1e-10
     newton_max_iterations: int = 15
     # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
@@ -78,12 +76,11 @@ class SolverOptions:
     # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
     mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
     # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
-    # ICC(0) instead of LU (whose factor is as large as the flow's: 1.0 vs 1.1 GB on the coarse model 3);
-    # None: always LU
+    # ICC(0) instead of LU, whose factor is as large as the flow block's; None: always LU
     mesh_motion_direct_max_unknowns: int | None = None
     # CG + ICC(0) mesh motion: residual reduction relative to the preconditioned right-hand side ||B b||, i.e.
-    # to the whole displacement, not to its change in a step. 1e-9 of a ~1 mm wall motion is ~1e-12 m, a mesh
-    # velocity error of ~1e-10 m/s at dt = 10 ms against mm/s urine velocities.
+    # to the whole displacement, not to its change in a step: small enough that the mesh velocity's error
+    # rtol |d| / dt stays far below the flow's velocities
     mesh_motion_rtol: float = 1e-9
     krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
     krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
