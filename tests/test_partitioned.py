@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from _engine_cases import field_errors, tube_case, tube_problem, tube_reference, tube_run
+from _engine_cases import WALL_ENDS, field_errors, tube_case, tube_problem, tube_reference, tube_run
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
+from ureterfsi.fsi.condensation import CondensedSolidFactor
+from ureterfsi.fsi.partitioned import BlockFactor
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 
@@ -95,3 +97,61 @@ def test_partitioned_needs_a_coupled_scene():
         MonolithicFSI(fluid_alone, SolverOptions(coupling_scheme="partitioned"))
     with pytest.raises(ValueError, match="coupling_scheme 'monolithic' or 'partitioned', got 'staggered'"):
         MonolithicFSI(tube_case().scene, SolverOptions(coupling_scheme="staggered"))
+
+
+def _tube_newton_system(seed):
+    """The tube's Newton system at a perturbed state of its first step: (problem, A, b)."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", **TOL))
+    pb.solve_steady()
+    pb.set_bdf(2e-3)
+    pb.t.value = 2e-3
+    rng = np.random.default_rng(seed)
+    pb.x.x.array[:] += 1e-6 * rng.standard_normal(pb.x.x.array.size)
+    pb.x.x.scatter_forward()
+    A, b = pb.pose_newton_system(2e-3)
+    return pb, A, b
+
+
+def test_the_condensed_solid_solve_is_the_whole_blocks():
+    """Eliminating the solid velocity through the kinematic rows is exact: the condensed LU's correction equals the
+    whole block's LU's, with the kinematic rows' residual nonzero too (a random right-hand side)."""
+    pb, A, b = _tube_newton_system(3)
+    part = pb.partitioned
+    condensed = part.factors["solid"]
+    assert isinstance(condensed, CondensedSolidFactor)
+    part.refresh("solid")                     # from the Jacobian at this state (A)
+    index = part.index["solid"]
+    whole = BlockFactor(pb.comm, "test_whole_solid_", 50)
+    whole.refresh(A, index, condensed.rate)
+    rhs = b.getSubVector(index).duplicate()
+    rhs.setArray(np.random.default_rng(4).standard_normal(rhs.getLocalSize()))
+    x_whole, x_condensed = rhs.duplicate(), rhs.duplicate()
+    assert whole.solve(rhs, x_whole) == "" and condensed.solve(rhs, x_condensed) == ""
+    assert np.abs(x_condensed.array - x_whole.array).max() <= 1e-9 * np.abs(x_whole.array).max()
+    sizes = condensed.sizes
+    assert sizes["eliminated"] > 0 and sizes["eliminated"] + sizes["condensed"] == part.sizes["solid"], sizes
+
+
+def test_the_condensation_checks_the_kinematic_pairing():
+    """A Jacobian whose kinematic rows do not pair velocity and displacement is refused, not condensed."""
+    pb, A, _ = _tube_newton_system(5)
+    part = pb.partitioned
+    condensed = part.factors["solid"]
+    part.refresh("solid")
+    condensed.check_pairing(A, condensed.rate)
+    B = A.copy()
+    row = int(condensed.IU.getIndices()[0])
+    col = int(condensed.IR.getIndices()[np.searchsorted(condensed.r_pos, condensed.u_pos[0])])
+    B.setValue(row, col, 2.0 * B.getValue(row, col))
+    B.assemble()
+    with pytest.raises(RuntimeError, match="do not pair velocity and displacement"):
+        condensed.check_pairing(B, condensed.rate)
+
+
+def test_a_solid_node_constraining_one_of_velocity_and_displacement_is_not_condensed():
+    case = tube_case()
+    case.scene.dirichlet = [bc for bc in case.scene.dirichlet
+                            if not (bc.field == "velocity" and bc.tags == [WALL_ENDS])]
+    with pytest.raises(ValueError, match="constrain the velocity or the displacement but not both"):
+        MonolithicFSI(case.scene, SolverOptions(coupling_scheme="partitioned", **TOL))
+    MonolithicFSI(case.scene, SolverOptions(coupling_scheme="partitioned", solid_block="whole", **TOL))

@@ -27,6 +27,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from .condensation import CondensedSolidFactor, kinematic_pairs
 from .linear_solvers import SPLITS, mumps_options
 from .newton import NewtonDivergence, fields_off, measure_field_increments
 
@@ -47,7 +48,6 @@ class BlockFactor:
         self.ksp.setFromOptions()
         self.block = None
         self.rate = None                  # b0/dt of the Jacobian it was factorised from
-        self.factorisations = 0
 
     def refresh(self, matrix: PETSc.Mat, index: PETSc.IS, rate: float) -> None:
         """Factorise matrix[index, index]."""
@@ -55,8 +55,8 @@ class BlockFactor:
         self.ksp.setOperators(self.block)
         self.ksp.getPC().setReusePreconditioner(False)
         self.ksp.setUp()
+        self.ksp.getPC().setUp()          # factorise now (KSP's own set-up would leave it to the first solve)
         self.rate = rate
-        self.factorisations += 1
 
     def solve(self, b: PETSc.Vec, x: PETSc.Vec) -> str:
         """x = A[I, I]^-1 b; returns why it failed ("" if it did not)."""
@@ -72,12 +72,13 @@ class BlockFactor:
 class PartitionedCoupling:
     """The sweeps of the module docstring on `problem` (a MonolithicFSI of a coupled scene, monolithic mesh
     motion). `flow_residual_form`: every term of the residual but the solids' volume terms (its rows of the urine
-    split are the residual's); `flow_jacobian_form`: its derivative in the velocity and pressure directions.
+    split are the residual's); `flow_jacobian_form`: its derivative in the velocity and pressure directions,
+    assembled into `flow_matrix`.
     `solve()` replaces the problem's Newton solve: returns (sweeps, residual norms at each sweep's start and
     the last); counters (in problem.counters): sweeps, block solves and factorisations per split;
     timings (problem.timings): each block's factorisation and solves, the flow Jacobian's assembly."""
 
-    def __init__(self, problem, flow_residual_form, flow_jacobian_form, block_iterations: int):
+    def __init__(self, problem, flow_residual_form, flow_jacobian_form, flow_matrix, block_iterations: int):
         self.pb = pb = problem
         self.flow_residual_form, self.flow_jacobian_form = flow_residual_form, flow_jacobian_form
         self.block_iterations = int(block_iterations)
@@ -90,16 +91,26 @@ class PartitionedCoupling:
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
         self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
+        if pb.options.solid_block == "condensed":
+            v_pos, u_pos, mismatched = kinematic_pairs(pb, splits["solid"])
+            if pb.comm.allreduce(mismatched):
+                raise ValueError(f"solid_block 'condensed': {pb.comm.allreduce(mismatched)} solid nodes constrain the "
+                                 f"velocity or the displacement but not both (use solid_block 'whole')")
+            offset = pb.W.dofmap.index_map.local_range[0] * pb.W.dofmap.index_map_bs
+            self.factors["solid"] = CondensedSolidFactor(pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"],
+                                                         offset, v_pos, u_pos)
         # {split: {field: positions in the split's local array}} for the per-field increments of a block
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
                               for f, d in pb._field_owned.items()} for n in ORDER}
-        self.Af = pb.A.duplicate()
+        self.Af = flow_matrix          # the flow block's pattern (and every diagonal), for flow_jacobian_form
         # the rows a block's iteration needs, assembled alone: the urine's from flow_residual_form, the mesh's from
         # the (linear) mesh-motion form; the wall's rows take the whole residual (the urine's traction is in them)
         self._row_vectors = {"flow": pb.b.duplicate(), "mesh": pb.bm.duplicate()}
-        self.work = {n: pb.x.vector.getSubVector(self.index[n]).duplicate() for n in ORDER}
+        self.work = {}
         for n in ORDER:
-            pb.x.vector.restoreSubVector(self.index[n], pb.x.vector.getSubVector(self.index[n]))
+            sub = pb.x.vector.getSubVector(self.index[n])
+            self.work[n] = sub.duplicate()
+            pb.x.vector.restoreSubVector(self.index[n], sub)
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         pb.counters |= {"sweeps": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}

@@ -103,6 +103,9 @@ class SolverOptions:
     # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
     # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
     block_reuse_contraction: float = 0.5
+    # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
+    # fsi.condensation) or "whole" (the block as it stands)
+    solid_block: str = "condensed"
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
@@ -272,6 +275,8 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
+        if opts.solid_block not in ("condensed", "whole"):
+            raise ValueError(f"solid_block 'condensed' or 'whole', got {opts.solid_block!r}")
         if opts.coupling_scheme not in ("monolithic", "partitioned"):
             raise ValueError(f"coupling_scheme 'monolithic' or 'partitioned', got {opts.coupling_scheme!r}")
         if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
@@ -289,7 +294,7 @@ class MonolithicFSI:
         self._b_free = self.b.duplicate()
         self._reaction_ready = False    # _b_free holds the residual of the last accepted state (assemble_reaction)
         if self.mesh_form is not None:
-            self.Am = (sparsity.coupled_matrix(W, self.field_names, self.cells(fluid_tags), solids, mesh_rows_only=True)
+            self.Am = (sparsity.coupled_matrix(W, self.field_names, self.cells(fluid_tags), solids, part="mesh")
                        if own else fem_petsc.create_matrix(self.mesh_jacobian_form))
             self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
@@ -488,7 +493,9 @@ class MonolithicFSI:
             parts += [trial[offset + i] if name in ("velocity", "pressure") else ufl.as_ufl(0.0) for i in range(n)]
             offset += n
         form = fem.form(ufl.derivative(R_flow, self.x, ufl.as_vector(parts)))
-        return PartitionedCoupling(self, fem.form(R_flow), form, self.options.block_iterations)
+        matrix = (sparsity.coupled_matrix(self.W, self.field_names, self.cells(self.fluid_tags), [], part="flow")
+                  if self.options.jacobian_sparsity == "couplings" else fem_petsc.create_matrix(form))
+        return PartitionedCoupling(self, fem.form(R_flow), form, matrix, self.options.block_iterations)
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""

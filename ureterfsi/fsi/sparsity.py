@@ -73,14 +73,15 @@ def flow_matrix(W: fem.FunctionSpace, field_names: list) -> PETSc.Mat:
 
 
 def coupled_matrix(W: fem.FunctionSpace, field_names: list, fluid_cells: np.ndarray, solids: list,
-                   mesh_rows_only: bool = False) -> PETSc.Mat:
+                   part: str = "whole") -> PETSc.Mat:
     """Jacobian matrix of the coupled Newton system with the couplings of the module docstring; `solids`:
-    [(local cells, Mooney-Rivlin?)] per solid region. `mesh_rows_only`: the mesh-motion Jacobian (u <- u on
-    fluid cells, and the diagonal)."""
-    blocks = [(fluid_cells, ["displacement"], ["displacement"])]
-    if not mesh_rows_only:
-        flow = [f for f in ("velocity", "pressure") if f in field_names]
-        blocks.append((fluid_cells, flow, flow + ["displacement"]))
+    [(local cells, Mooney-Rivlin?)] per solid region. `part`: "whole", "mesh" (the mesh-motion Jacobian: u <- u
+    on fluid cells) or "flow" (the urine's block: v, p <- v, p on fluid cells), each with every diagonal."""
+    flow = [f for f in ("velocity", "pressure") if f in field_names]
+    blocks = {"mesh": [(fluid_cells, ["displacement"], ["displacement"])],
+              "flow": [(fluid_cells, flow, flow)]}.get(part)
+    if blocks is None:
+        blocks = [(fluid_cells, ["displacement"], ["displacement"]), (fluid_cells, flow, flow + ["displacement"])]
         for cells, mooney_rivlin in solids:
             pi = ["solid_pressure"] if mooney_rivlin else []
             blocks += [(cells, ["velocity"], ["velocity", "displacement"] + pi),

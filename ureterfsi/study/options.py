@@ -40,7 +40,7 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
                          krylov_refactorise_iterations=s["krylov_refactorise_iterations"],
                          coupling_scheme=s["fully_coupled_scheme"] if fully_coupled else "monolithic",
                          anderson_depth=s["anderson_depth"], block_iterations=s["block_iterations"],
-                         block_reuse_contraction=s["block_reuse_contraction"])
+                         block_reuse_contraction=s["block_reuse_contraction"], solid_block=s["solid_block"])
 
 
 def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",
