@@ -90,7 +90,8 @@ def run_variant(args):
            "cpu_s": comm.allreduce(cpu, MPI.MAX), "cpu_total_s": comm.allreduce(cpu),
            "s_per_step": [r.wall_time for r in records], "newton": [r.newton_iterations for r in records],
            "krylov": krylov.per_step, "counters": dict(pb.counters), "timings": dict(pb.timings),
-           "peak_gib": peak, "jacobian_entries": pb.A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]}
+           "peak_gib": peak, "jacobian_entries": (pb.A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]
+                                                   if pb.partitioned is None else 0)}
     if pb.partitioned is not None:
         out["splits"] = pb.partitioned.sizes
     elif pb.linear_solver.sizes is not None:
@@ -136,7 +137,8 @@ def report(res, ref):
           f"kept {tm['solve']:.1f} s"
           + "".join(f", {k} {tm[k]:.1f} s" for k in ("block_extraction", "solid_factorise", "mesh_factorise",
                                                       "flow_factorise", "krylov", "solid_solve", "flow_solve",
-                                                      "assemble_flow_jacobian") if k in tm)
+                                                      "assemble_flow_jacobian", "assemble_solid_jacobian",
+                                                      "assemble_block_rows") if k in tm)
           + f"; peak {res['peak_gib']:.2f} GiB; state vs first: {diff}", flush=True)
 
 

@@ -21,8 +21,10 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
+from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -69,20 +71,30 @@ class BlockFactor:
                 f"INFOG(2) = {f.getMumpsInfog(2)}: -8/-9/-13 workspace or memory, -10 singular)")
 
 
+@dataclass
+class BlockForms:
+    """A block's rows (`residual`), their Jacobian in the block's directions (`jacobian`) and its matrix;
+    the wall's also the solids' mass form and its matrix (`mass`)."""
+    residual: fem.Form
+    jacobian: fem.Form
+    matrix: PETSc.Mat
+    mass: tuple | None = None
+
+
 class PartitionedCoupling:
     """The sweeps of the module docstring on `problem` (a MonolithicFSI of a coupled scene, monolithic mesh
-    motion). `flow_residual_form`: every term of the residual but the solids' volume terms (its rows of the urine
-    split are the residual's); `flow_jacobian_form`: its derivative in the velocity and pressure directions,
-    assembled into `flow_matrix`.
+    motion) over its coupled `splits`. `flow`: the urine's rows (every term of the residual but the solids' volume
+    terms) and their Jacobian in the velocity and pressure directions; `wall` (None: the whole Jacobian's block):
+    the wall's rows (the residual over the solid cells and the urine cells touching them) and their Jacobian along
+    the kinematic direction, for the condensed LU (fsi.condensation).
     `solve()` replaces the problem's Newton solve: returns (sweeps, residual norms at each sweep's start and
     the last); counters (in problem.counters): sweeps, block solves and factorisations per split;
-    timings (problem.timings): each block's factorisation and solves, the flow Jacobian's assembly."""
+    timings (problem.timings): each block's factorisation and solves, the block Jacobians' and rows' assembly."""
 
-    def __init__(self, problem, flow_residual_form, flow_jacobian_form, flow_matrix, block_iterations: int):
+    def __init__(self, problem, splits: dict, flow: BlockForms, wall: BlockForms | None, block_iterations: int):
         self.pb = pb = problem
-        self.flow_residual_form, self.flow_jacobian_form = flow_residual_form, flow_jacobian_form
+        self.forms = {"flow": flow, "solid": wall}
         self.block_iterations = int(block_iterations)
-        splits = pb.coupled_splits()
         if any(pb.comm.allreduce(len(splits[n])) == 0 for n in ORDER):
             sizes = {n: pb.comm.allreduce(len(splits[n])) for n in ORDER}
             raise ValueError(f"coupling_scheme 'partitioned' needs non-empty splits {ORDER} (a scene with a fluid and "
@@ -91,21 +103,27 @@ class PartitionedCoupling:
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
         self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
-        if pb.options.solid_block == "condensed":
+        self.condensed = wall is not None
+        if self.condensed:
             v_pos, u_pos, mismatched = kinematic_pairs(pb, splits["solid"])
             if pb.comm.allreduce(mismatched):
                 raise ValueError(f"solid_block 'condensed': {pb.comm.allreduce(mismatched)} solid nodes constrain the "
                                  f"velocity or the displacement but not both (use solid_block 'whole')")
+            mass_form, mass = wall.mass
+            fem_petsc.assemble_matrix(mass, mass_form)
+            mass.assemble()
             offset = pb.W.dofmap.index_map.local_range[0] * pb.W.dofmap.index_map_bs
             self.factors["solid"] = CondensedSolidFactor(pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"],
-                                                         offset, v_pos, u_pos)
+                                                         offset, v_pos, u_pos, mass)
+            mass.destroy()
         # {split: {field: positions in the split's local array}} for the per-field increments of a block
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
                               for f, d in pb._field_owned.items()} for n in ORDER}
-        self.Af = flow_matrix          # the flow block's pattern (and every diagonal), for flow_jacobian_form
-        # the rows a block's iteration needs, assembled alone: the urine's from flow_residual_form, the mesh's from
-        # the (linear) mesh-motion form; the wall's rows take the whole residual (the urine's traction is in them)
+        # the rows a block's iteration needs, assembled alone: the urine's and (condensed) the wall's from their
+        # forms, the mesh's from the (linear) mesh-motion form; else the wall's from the whole residual
         self._row_vectors = {"flow": pb.b.duplicate(), "mesh": pb.bm.duplicate()}
+        if self.condensed:
+            self._row_vectors["solid"] = pb.b.duplicate()
         self.work = {}
         for n in ORDER:
             sub = pb.x.vector.getSubVector(self.index[n])
@@ -114,7 +132,7 @@ class PartitionedCoupling:
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         pb.counters |= {"sweeps": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
-        pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_block_rows": 0.0}
+        pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_solid_jacobian": 0.0, "assemble_block_rows": 0.0}
 
     def invalidate(self) -> None:
         """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator)."""
@@ -123,16 +141,20 @@ class PartitionedCoupling:
 
     # ---------------------------------------------------------------------------------------
     def refresh(self, name: str) -> None:
-        """Refactorise block `name` from a Jacobian at the current state (the flow block from its own form)."""
+        """Refactorise block `name` from a Jacobian at the current state: the urine's and (condensed) the wall's
+        from their own forms, the mesh's from the fixed mesh-motion operator, else the whole Jacobian's block."""
         pb = self.pb
         t0 = time.perf_counter()
         rate = pb._rate()
-        if name == "flow":
-            self.Af.zeroEntries()
-            fem_petsc.assemble_matrix(self.Af, self.flow_jacobian_form, bcs=pb.bcs)
-            self.Af.assemble()
-            pb.timings["assemble_flow_jacobian"] += time.perf_counter() - t0
-            matrix = self.Af
+        forms = self.forms.get(name)
+        if forms is not None:
+            matrix = forms.matrix
+            matrix.zeroEntries()
+            fem_petsc.assemble_matrix(matrix, forms.jacobian, bcs=pb.bcs)
+            matrix.assemble()
+            pb.timings[f"assemble_{name}_jacobian"] += time.perf_counter() - t0
+        elif name == "mesh":
+            matrix = pb.mesh_motion_matrix()
         else:
             pb._assemble_jacobian()
             matrix = pb.A
@@ -166,16 +188,16 @@ class PartitionedCoupling:
     def block_residual(self, name: str) -> PETSc.Vec:
         """A vector whose entries on split `name` are the residual's at the current state."""
         pb = self.pb
-        if name == "solid":
+        if name == "solid" and not self.condensed:
             pb._assemble_residual()
             return pb.b
         t0 = time.perf_counter()
         vec = self._row_vectors[name]
         with vec.localForm() as loc:
             loc.set(0.0)
-        fem_petsc.assemble_vector(vec, self.flow_residual_form if name == "flow" else pb.mesh_form)
+        fem_petsc.assemble_vector(vec, pb.mesh_form if name == "mesh" else self.forms[name].residual)
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if name == "flow":
+        if name != "mesh":
             fem_petsc.set_bc(vec, pb.bcs, pb.x.vector, -1.0)
         pb.timings["assemble_block_rows"] += time.perf_counter() - t0
         return vec
@@ -241,6 +263,19 @@ class PartitionedCoupling:
         gamma = np.linalg.lstsq(gram + 1e-14 * np.trace(gram) * np.eye(m), rhs, rcond=None)[0]
         return gs[-1] - dG.T @ gamma
 
+    def hold_kinematics(self) -> float:
+        """Make the solids' kinematic rows hold (the condensed wall keeps them; an extrapolated state breaks them):
+        the paired velocities += M^-1 r_U of the residual in problem.b; returns the residual norm after."""
+        pb, index = self.pb, self.index["solid"]
+        rb = pb.b.getSubVector(index)
+        y = self.factors["solid"].kinematic_correction(rb)
+        pb.b.restoreSubVector(index, rb)
+        xb = pb.x.vector.getSubVector(index)
+        xb.array[self.factors["solid"].v_pos] += y
+        pb.x.vector.restoreSubVector(index, xb)
+        pb.x.x.scatter_forward()
+        return pb._assemble_residual()
+
     def _fields_off(self, rtol: float | None) -> dict:
         return fields_off(self.field_increments, self.pb._field_owned, rtol, self.pb.options.newton_increment_floor)
 
@@ -250,6 +285,8 @@ class PartitionedCoupling:
         pb, o = self.pb, self.pb.options
         self.field_increments = {}
         r = r0 = pb._assemble_residual()
+        if self.condensed:
+            r = r0 = self.hold_kinematics()
         history = [r]
         n = pb.x.vector.getLocalSize()                  # owned entries of the state
         xs, gs = [], []

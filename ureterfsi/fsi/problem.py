@@ -24,11 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
+from dolfinx.la import ScatterMode
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import physics, sparsity
+from . import forms, physics, sparsity
 from .ale_jacobian import ALEJacobian
 from .linear_solvers import (KRYLOV, MUMPS_WORKSPACE_PERCENT, BlockGaussSeidel, FlowBlockLU, LinearSolver,
                              SchurFieldsplit, WholeSystemLU, direct_package)
@@ -36,7 +38,7 @@ from .materials import LinearElastic, MooneyRivlin
 from .mesh_motion import Extension, PrescribedMap
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
-from .partitioned import PartitionedCoupling
+from .partitioned import BlockForms, PartitionedCoupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
@@ -217,38 +219,11 @@ class MonolithicFSI:
         self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
 
         # --- residual -----------------------------------------------------------------------
-        R = 0
-        if fluid_tags:
-            fl = scene.fluid.material
-            R += physics.fluid_ale_residual(ops, fl, v, X["pressure"], u, dvdt, dudt, phi,
-                                            tests["pressure"], dx(fluid_tags))
-            for ob in scene.open_boundaries:
-                R += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt,
-                                                    phi, ds(tuple(ob.tags)))
-        # every term but the solids' volume terms: the residual's rows of the urine exactly (coupling_scheme
-        # "partitioned"; a solid cell holds no dof of the urine's split)
-        R_flow = R
-        for solid in scene.solids:
-            mat, dxs = solid.material, dx(tuple(solid.tags))
-            R += physics.solid_inertia_residual(ops, mat.density, dvdt, phi, dxs)
-            R += physics.kinematic_residual(ops, dudt, v, psi, dxs)
-            if isinstance(mat, MooneyRivlin):
-                R += physics.mooney_rivlin_residual(ops, mat, u, X["solid_pressure"], phi,
-                                                    tests["solid_pressure"], dxs)
-            elif isinstance(mat, LinearElastic):
-                R += physics.elastic_residual(ops, mat, u, phi, dxs)
-            else:
-                raise TypeError(f"unsupported solid material {type(mat).__name__}")
-        X_ref = ufl.SpatialCoordinate(mesh)
-        loads = [physics.surface_load_residual(ops, load.traction(X_ref, self.t, ops.normal()), phi,
-                                               ds(tuple(load.tags))) for load in scene.loads]
-        loads += [physics.surface_load_residual(ops, physics.follower_pressure_traction(ops, load.pressure(X_ref, self.t), u),
-                                                phi, ds(tuple(load.tags))) for load in scene.pressure_loads]
-        loads += [physics.body_force_residual(ops, load.force(X_ref, self.t), phi, dx(tuple(load.tags)))
-                  for load in scene.body_forces]
-        for term in loads:
-            R += term
-            R_flow += term
+        def terms(dx):
+            return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds)
+
+        whole = terms(dx)
+        R = whole.urine + whole.solids + whole.loads
         self.residual_form = fem.form(R)
         self.jacobian_form = fem.form(ufl.derivative(R, self.x))
 
@@ -284,12 +259,8 @@ class MonolithicFSI:
         if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
             raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
         own = opts.jacobian_sparsity == "couplings"
-        solids = [(self.cells(tuple(s.tags)), isinstance(s.material, MooneyRivlin)) for s in scene.solids]
-        if self.segregated:
-            self.A = sparsity.flow_matrix(W, self.field_names)
-        else:
-            self.A = (sparsity.coupled_matrix(W, self.field_names, self.cells(fluid_tags), solids) if own
-                      else fem_petsc.create_matrix(self.jacobian_form))
+        solids = self.solid_regions()
+        self._A = None
         self.b = fem_petsc.create_vector(self.residual_form)
         self._b_free = self.b.duplicate()
         self._reaction_ready = False    # _b_free holds the residual of the last accepted state (assemble_reaction)
@@ -308,15 +279,34 @@ class MonolithicFSI:
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
-        self.ksp.setOperators(self.A)
+        if opts.coupling_scheme == "monolithic":
+            self.ksp.setOperators(self.A)
         self.linear_solver = self._linear_solver(prefix)
         self.ksp.setFromOptions()
-        self.partitioned = self._partitioned(R_flow) if opts.coupling_scheme == "partitioned" else None
+        self.partitioned = self._partitioned(whole, terms) if opts.coupling_scheme == "partitioned" else None
         self._jacobian_valid = False
         # det(I + Grad u) at the fluid cells' vertices: the inversion guard
         self.ale_jacobian = ALEJacobian(ops, u, self.cells(fluid_tags)) if fluid_tags else None
 
     # ---------------------------------------------------------------------------------------
+    @property
+    def A(self) -> PETSc.Mat:
+        """The whole Newton system's matrix, made at its first use (the partitioned scheme's condensed wall and
+        urine blocks assemble their own)."""
+        if self._A is None:
+            if self.segregated:
+                self._A = sparsity.flow_matrix(self.W, self.field_names)
+            elif self.options.jacobian_sparsity == "couplings":
+                self._A = sparsity.coupled_matrix(self.W, self.field_names, self.cells(self.fluid_tags),
+                                                  self.solid_regions())
+            else:
+                self._A = fem_petsc.create_matrix(self.jacobian_form)
+        return self._A
+
+    def solid_regions(self) -> list:
+        """[(local cells, Mooney-Rivlin?)] per solid region of the scene."""
+        return [(self.cells(tuple(s.tags)), isinstance(s.material, MooneyRivlin)) for s in self.scene.solids]
+
     def sub(self, name):
         return self.W.sub(self.index[name])
 
@@ -480,22 +470,72 @@ class MonolithicFSI:
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
-    def _partitioned(self, R_flow) -> PartitionedCoupling:
-        """The partitioned strategy, with the urine's rows R_flow and their Jacobian: R_flow differentiated in the
-        velocity and pressure directions only (the trial function with its displacement and solid pressure
-        components zero)."""
+    def _direction(self, components: dict):
+        """A direction in W for ufl.derivative: {field: its components as a function of {field: components of the
+        trial function}} (other fields 0)."""
+        trial, parts, offset = ufl.TrialFunction(self.W), [], 0
+        fields = {}
+        for name, element in zip(self.field_names, self.W.ufl_element().sub_elements()):
+            n = element.value_size()
+            fields[name] = [trial[offset + i] for i in range(n)]
+            offset += n
+        for name in self.field_names:
+            expr = components.get(name)
+            parts += (list(expr(fields)) if expr is not None else [ufl.as_ufl(0.0)] * len(fields[name]))
+        return ufl.as_vector(parts)
+
+    def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
+        """The partitioned strategy (fsi.partitioned). The urine's rows: the residual but the solids' volume terms,
+        differentiated in the velocity and pressure directions. The wall's rows (solid_block "condensed"): the
+        residual over the solid cells and the urine cells touching them (`terms`(dx) with that measure),
+        differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
+        solids' mass matrix."""
         if self.segregated or not self.fluid_tags or not self.solid_tags:
             raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
                              "mesh_motion_coupling 'monolithic'")
-        trial, parts, offset = ufl.TrialFunction(self.W), [], 0
-        for name, element in zip(self.field_names, self.W.ufl_element().sub_elements()):
-            n = element.value_size()
-            parts += [trial[offset + i] if name in ("velocity", "pressure") else ufl.as_ufl(0.0) for i in range(n)]
-            offset += n
-        form = fem.form(ufl.derivative(R_flow, self.x, ufl.as_vector(parts)))
-        matrix = (sparsity.coupled_matrix(self.W, self.field_names, self.cells(self.fluid_tags), [], part="flow")
-                  if self.options.jacobian_sparsity == "couplings" else fem_petsc.create_matrix(form))
-        return PartitionedCoupling(self, fem.form(R_flow), form, matrix, self.options.block_iterations)
+        own = self.options.jacobian_sparsity == "couplings"
+        R_flow = whole.urine + whole.loads
+        flow_jacobian = fem.form(ufl.derivative(R_flow, self.x, self._direction(
+            {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})))
+        flow = BlockForms(fem.form(R_flow), flow_jacobian,
+                          sparsity.coupled_matrix(self.W, self.field_names, self.cells(self.fluid_tags), [], part="flow")
+                          if own else fem_petsc.create_matrix(flow_jacobian))
+        splits = self.coupled_splits()
+        wall = None
+        if self.options.solid_block == "condensed":
+            urine_cells = self._cells_touching(self.cells(self.fluid_tags), splits["solid"])
+            wall_cells = np.union1d(self.cells(self.solid_tags), urine_cells)
+            tags = self.scene.cell_tags
+            keep = np.isin(tags.indices, wall_cells)
+            wall_tags = dmesh.meshtags(self.mesh, self.mesh.topology.dim, tags.indices[keep], tags.values[keep])
+            dxw = ufl.Measure("dx", domain=self.mesh, subdomain_data=wall_tags, metadata=self.dx.metadata())
+            w = terms(dxw)
+            R_wall = w.urine + w.solids + w.loads
+            others = {n: (lambda f, n=n: f[n]) for n in ("displacement", "pressure", "solid_pressure")
+                      if n in self.field_names}
+            velocity = self._direction({"velocity": lambda f: f["displacement"]})
+            wall_jacobian = fem.form(self.bdf[0] / self.dt * ufl.derivative(R_wall, self.x, velocity)
+                                     + ufl.derivative(R_wall, self.x, self._direction(others)))
+            v_trial = ufl.split(ufl.TrialFunction(self.W))[self.index["velocity"]]
+            psi = ufl.split(ufl.TestFunction(self.W))[self.index["displacement"]]
+            mass_form = fem.form(forms.kinematic_mass(self.ops, self.scene, v_trial, psi, dxw))
+            solid_cells = self.cells(self.solid_tags)
+            wall = BlockForms(fem.form(R_wall), wall_jacobian,
+                              sparsity.coupled_matrix(self.W, self.field_names, urine_cells, self.solid_regions(),
+                                                      part="wall"),
+                              mass=(mass_form, sparsity.pattern_matrix(
+                                  self.W, self.field_names, [(solid_cells, ["displacement"], ["velocity"])],
+                                  np.arange(self.x.vector.getLocalSize(), dtype=np.int32))))
+        return PartitionedCoupling(self, splits, flow, wall, self.options.block_iterations)
+
+    def _cells_touching(self, cells: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """Those of `cells` (local) with a velocity dof among the owned local `dofs` of any rank."""
+        marker = fem.Function(self.W)
+        marker.x.array[dofs] = 1.0
+        marker.x.scatter_reverse(ScatterMode.add)
+        marker.x.scatter_forward()
+        cell_dofs = sparsity.cell_dofs(self.W, self.field_names, "velocity")[cells]
+        return cells[(marker.x.array[cell_dofs] > 0).any(axis=1)]
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
@@ -598,16 +638,21 @@ class MonolithicFSI:
         fem_petsc.assemble_matrix(A, self.jacobian_form, bcs=self.bcs)
         A.assemble()
         if self.mesh_jacobian_form is not None:
-            Am = self.Am
-            if not self._mesh_jacobian_ready:     # a linear extension with a fixed stiffness: assembled once
-                fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
-                Am.assemble()
-                Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
-                self._mesh_jacobian_ready = True
-            A.axpy(1.0, Am, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            A.axpy(1.0, self.mesh_motion_matrix(), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._jacobian_valid = True
         self._jacobian_rate = self._rate()
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
+
+    def mesh_motion_matrix(self) -> PETSc.Mat:
+        """The mesh-motion rows' Jacobian (the interface's and Dirichlet rows removed): a linear extension with a
+        fixed stiffness, assembled once."""
+        Am = self.Am
+        if not self._mesh_jacobian_ready:
+            fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
+            Am.assemble()
+            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            self._mesh_jacobian_ready = True
+        return Am
 
     def _rate(self) -> float:
         """b0/dt, the only time-integration coefficient in the Jacobian (0 in steady solves)."""

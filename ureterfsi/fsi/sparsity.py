@@ -76,11 +76,19 @@ def coupled_matrix(W: fem.FunctionSpace, field_names: list, fluid_cells: np.ndar
                    part: str = "whole") -> PETSc.Mat:
     """Jacobian matrix of the coupled Newton system with the couplings of the module docstring; `solids`:
     [(local cells, Mooney-Rivlin?)] per solid region. `part`: "whole", "mesh" (the mesh-motion Jacobian: u <- u
-    on fluid cells) or "flow" (the urine's block: v, p <- v, p on fluid cells), each with every diagonal."""
+    on fluid cells), "flow" (the urine's block: v, p <- v, p on fluid cells) or "wall" (the wall's rows along the
+    kinematic direction, fsi.condensation: solid cells v, u, pi <- u, pi, `fluid_cells` v, p <- u, p), each with
+    every diagonal."""
     flow = [f for f in ("velocity", "pressure") if f in field_names]
+    pressure = [f for f in ("pressure",) if f in field_names]
     blocks = {"mesh": [(fluid_cells, ["displacement"], ["displacement"])],
               "flow": [(fluid_cells, flow, flow)]}.get(part)
-    if blocks is None:
+    if part == "wall":
+        blocks = [(fluid_cells, flow, ["displacement"] + pressure)]
+        for cells, mooney_rivlin in solids:
+            pi = ["solid_pressure"] if mooney_rivlin else []
+            blocks.append((cells, ["velocity", "displacement"] + pi, ["displacement"] + pi))
+    elif blocks is None:
         blocks = [(fluid_cells, ["displacement"], ["displacement"]), (fluid_cells, flow, flow + ["displacement"])]
         for cells, mooney_rivlin in solids:
             pi = ["solid_pressure"] if mooney_rivlin else []
