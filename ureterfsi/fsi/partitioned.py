@@ -169,21 +169,10 @@ class PartitionedCoupling:
             return False
         return name == "mesh" or math.isclose(rate, self.pb._rate(), rel_tol=1e-12)
 
-    def _block_increment(self, name: str, dx: np.ndarray, scale: dict) -> float:
-        """Largest ||dx_f||_inf / ||x_f||_inf over the fields of the block (increments below
-        newton_increment_floor count as zero), reduced over the ranks."""
-        local = np.array([np.abs(dx[p]).max(initial=0.0) for p in self.positions[name].values()])
-        inc = np.empty_like(local)
-        self.pb.comm.Allreduce(local, inc, op=MPI.MAX)
-        floor = self.pb.options.newton_increment_floor
-        return max((i / max(scale[f], 1e-300) for f, i in zip(self.positions[name], inc) if i > floor), default=0.0)
-
     def _scales(self) -> dict:
+        """{field: ||x_f||_inf} of the current state, reduced over the ranks."""
         x = self.pb.x.x.array
-        local = np.array([np.abs(x[d]).max(initial=0.0) for d in self.pb._field_owned.values()])
-        out = np.empty_like(local)
-        self.pb.comm.Allreduce(local, out, op=MPI.MAX)
-        return dict(zip(self.pb._field_owned, out.tolist()))
+        return {f: s for f, (s, _) in measure_field_increments(x, x, self.pb._field_owned, self.pb.comm).items()}
 
     def block_residual(self, name: str) -> PETSc.Vec:
         """A vector whose entries on split `name` are the residual's at the current state."""
@@ -233,7 +222,9 @@ class PartitionedCoupling:
             pb.x.vector.restoreSubVector(index, xb)
             pb.x.x.scatter_forward()
             previous = norm
-            if self._block_increment(name, dx.array_r, scale) <= (o.newton_field_rtol or o.newton_stol):
+            increments = measure_field_increments(dx.array_r, dx.array_r, self.positions[name], pb.comm)
+            if not fields_off({f: (i, scale[f]) for f, (i, _) in increments.items()}, scale,
+                              o.newton_field_rtol or o.newton_stol, o.newton_increment_floor):
                 break
 
     def _weights(self) -> np.ndarray:
