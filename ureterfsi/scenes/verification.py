@@ -264,25 +264,30 @@ def annulus_3d_scene(a: Annulus, h):
                  name="annular-poiseuille-3d")
 
 
+def _quarter_annulus(name, Ri, Ro):
+    """In a new gmsh model `name`: the quarter annulus Ri < r < Ro, x, y >= 0 (built-in kernel); returns its
+    surface and {1: inner arc, 2: outer arc, 3: x = 0 line, 4: y = 0 line}."""
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add(name)
+    geo = gmsh.model.geo
+    c = geo.addPoint(0, 0, 0)
+    p1, p2, p3, p4 = (geo.addPoint(Ri, 0, 0), geo.addPoint(Ro, 0, 0), geo.addPoint(0, Ro, 0), geo.addPoint(0, Ri, 0))
+    curves = {4: geo.addLine(p1, p2), 2: geo.addCircleArc(p2, c, p3), 3: geo.addLine(p3, p4),
+              1: geo.addCircleArc(p4, c, p1)}
+    surf = geo.addPlaneSurface([geo.addCurveLoop([curves[4], curves[2], curves[3], curves[1]])])
+    return surf, curves
+
+
 def quarter_annulus_mesh(Ri, Ro, h, order=2):
     """Quarter annulus Ri < r < Ro, x, y >= 0 (gmsh, curved second-order geometry).
     Facets: 1 inner arc, 2 outer arc, 3 x = 0 line, 4 y = 0 line; cells 1."""
     gmsh.initialize()
     try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("quarter-annulus")
+        surf, curves = _quarter_annulus("quarter-annulus", Ri, Ro)
         geo = gmsh.model.geo
-        c = geo.addPoint(0, 0, 0)
-        p1, p2, p3, p4 = (geo.addPoint(Ri, 0, 0), geo.addPoint(Ro, 0, 0), geo.addPoint(0, Ro, 0),
-                          geo.addPoint(0, Ri, 0))
-        bottom = geo.addLine(p1, p2)
-        outer = geo.addCircleArc(p2, c, p3)
-        left = geo.addLine(p3, p4)
-        inner = geo.addCircleArc(p4, c, p1)
-        surf = geo.addPlaneSurface([geo.addCurveLoop([bottom, outer, left, inner])])
         geo.synchronize()
         gmsh.model.addPhysicalGroup(2, [surf], 1)
-        for tag, curve in ((1, inner), (2, outer), (3, left), (4, bottom)):
+        for tag, curve in sorted(curves.items()):
             gmsh.model.addPhysicalGroup(1, [curve], tag)
         gmsh.option.setNumber("Mesh.MeshSizeMin", h)
         gmsh.option.setNumber("Mesh.MeshSizeMax", h)
@@ -508,15 +513,8 @@ def quarter_tube_3d_scene(tube: Tube, h, pressure, follower=True):
     follower pressure p(t) (or the dead load P N = -p N). Facets: 1 inner, 2 outer, 3 x = 0, 4 y = 0, 5 ends."""
     gmsh.initialize()
     try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("quarter-tube")
+        surf, curves = _quarter_annulus("quarter-tube", tube.Ri, tube.Ro)
         geo = gmsh.model.geo
-        c = geo.addPoint(0, 0, 0)
-        p1, p2, p3, p4 = (geo.addPoint(tube.Ri, 0, 0), geo.addPoint(tube.Ro, 0, 0), geo.addPoint(0, tube.Ro, 0),
-                          geo.addPoint(0, tube.Ri, 0))
-        curves = {4: geo.addLine(p1, p2), 2: geo.addCircleArc(p2, c, p3), 3: geo.addLine(p3, p4),
-                  1: geo.addCircleArc(p4, c, p1)}
-        surf = geo.addPlaneSurface([geo.addCurveLoop([curves[4], curves[2], curves[3], curves[1]])])
         out = geo.extrude([(2, surf)], 0, 0, h, numElements=[1])
         geo.synchronize()
         # extrude returns [top, volume, then one lateral surface per bounding curve in curve-loop order]
