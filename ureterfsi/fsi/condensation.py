@@ -20,6 +20,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from .linear_solvers import mumps_options
+from .sparsity import cell_dofs
 
 KINEMATIC_RTOL = 1e-10        # the condensed operator's kinematic rows vanish to this part of (b0/dt) ||M||
 
@@ -41,9 +42,7 @@ def kinematic_pairs(problem, solid_split: np.ndarray) -> tuple[np.ndarray, np.nd
     whole because one of the two is constrained and the other not): the pairs (v_i, u_i) at the same node and
     component of the solid cells, both unconstrained, both owned."""
     cells = problem.cells(problem.solid_tags)
-    v_map, u_map = problem.sub("velocity").dofmap, problem.sub("displacement").dofmap
-    v = np.concatenate([np.zeros(0, np.int32)] + [v_map.cell_dofs(c) for c in cells])
-    u = np.concatenate([np.zeros(0, np.int32)] + [u_map.cell_dofs(c) for c in cells])
+    v, u = (cell_dofs(problem.W, problem.field_names, f)[cells].ravel() for f in ("velocity", "displacement"))
     v, first = np.unique(v, return_index=True)
     u = u[first]
     constrained = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in problem.bcs])
