@@ -19,7 +19,7 @@ import logging
 import math
 import time as _time
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import ufl
@@ -559,6 +559,14 @@ class MonolithicFSI:
                                      package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
                                      prefix=f"{self.options_prefix}mesh_", counters=self.counters,
                                      workspace_percent=o.mumps_workspace_percent)
+
+    def use_mesh_motion(self, prescribed) -> None:
+        """Swap the segregated mesh motion before a run: a prescribed ALE map (as Scene.mesh_motion) or None (the
+        extension problem); the problem is otherwise the one a scene with that map poses."""
+        if not self.segregated:
+            raise ValueError("use_mesh_motion swaps the segregated mesh motion (mesh_motion_coupling 'segregated')")
+        self.scene = replace(self.scene, mesh_motion=prescribed)
+        self._setup_mesh_motion(self.dx(self.fluid_tags))
 
     @property
     def mesh_motion_solver(self) -> str:

@@ -351,7 +351,7 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
     if choice.algebraic.value >= limit:
         return pb, fluid, choice
     t0 = _time.perf_counter()
-    pb = posed(None)
+    pb.use_mesh_motion(None)
     choice.used, choice.extension = "extension", predicted_min_jacobian(pb, history.time, axisymmetric)
     log.info("mesh motion auto: the algebraic map's minimum < %g; the extension's %s (%.1f s)", limit,
              choice.extension.text(), _time.perf_counter() - t0)
