@@ -290,7 +290,8 @@ class TimeIntegrator:
             self.records.append(StepRecord(step, pb.time, dt_try, its, history[-1], jmin, wall))
             progress.update(step, pb.time, dt_try, dt_try if attempt else min(s.dt, 2.0 * dt), _time.perf_counter())
             counters = getattr(pb, "counters", {})
-            krylov = counters.get("krylov_iterations")
+            # Krylov iterations of Newton's linear solves (none under the partitioned sweeps, which use LU per block)
+            krylov = None if "sweeps" in counters else counters.get("krylov_iterations")
             log.info("%s  t=%.5f s  dt=%.3e s  %s=%2d%s  residual=%.3e (from %.3e)  "
                      "min J_ale=%.4f  %.2f s/step", progress.describe(), pb.time, dt_try,
                      "sweeps" if "sweeps" in counters else "newton", its,
