@@ -24,11 +24,15 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import ufl
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
+from dolfinx.la import ScatterMode
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from . import forms, sparsity
 from .condensation import CondensedSolidFactor, kinematic_pairs
 from .linear_solvers import SPLITS, mumps_options
 from .newton import NewtonDivergence, fields_off, measure_field_increments
@@ -312,3 +316,70 @@ class PartitionedCoupling:
         raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} block Gauss-Seidel sweeps"
                           + (f" (last change relative to the field: {off})" if off else ""), history)
 
+
+# --- the blocks' forms ----------------------------------------------------------------------
+def direction(pb, components: dict):
+    """A direction in W for ufl.derivative: {field: its components as a function of {field: components of the
+    trial function}} (other fields 0)."""
+    trial, parts, offset = ufl.TrialFunction(pb.W), [], 0
+    fields = {}
+    for name, element in zip(pb.field_names, pb.W.ufl_element().sub_elements()):
+        n = element.value_size()
+        fields[name] = [trial[offset + i] for i in range(n)]
+        offset += n
+    for name in pb.field_names:
+        expr = components.get(name)
+        parts += (list(expr(fields)) if expr is not None else [ufl.as_ufl(0.0)] * len(fields[name]))
+    return ufl.as_vector(parts)
+
+
+def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
+    """The partitioned strategy on MonolithicFSI `pb` (a coupled scene, monolithic mesh motion) with the residual's
+    terms `whole` and `terms`(dx) (the same terms with another cell measure). The urine's rows: the residual but the solids' volume terms,
+    differentiated in the velocity and pressure directions. The wall's rows (solid_block "condensed"): the
+    residual over the solid cells and the urine cells touching them (`terms`(dx) with that measure),
+    differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
+    solids' mass matrix."""
+    own = pb.options.jacobian_sparsity == "couplings"
+    R_flow = whole.urine + whole.loads
+    flow_jacobian = fem.form(ufl.derivative(R_flow, pb.x, direction(pb, {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})))
+    flow = BlockForms(fem.form(R_flow), flow_jacobian,
+                      sparsity.coupled_matrix(pb.W, pb.field_names, pb.cells(pb.fluid_tags), [], part="flow")
+                      if own else fem_petsc.create_matrix(flow_jacobian))
+    splits = pb.coupled_splits()
+    wall = None
+    if pb.options.solid_block == "condensed":
+        urine_cells = cells_touching(pb, pb.cells(pb.fluid_tags), splits["solid"])
+        wall_cells = np.union1d(pb.cells(pb.solid_tags), urine_cells)
+        tags = pb.scene.cell_tags
+        keep = np.isin(tags.indices, wall_cells)
+        wall_tags = dmesh.meshtags(pb.mesh, pb.mesh.topology.dim, tags.indices[keep], tags.values[keep])
+        dxw = ufl.Measure("dx", domain=pb.mesh, subdomain_data=wall_tags, metadata=pb.dx.metadata())
+        w = terms(dxw)
+        R_wall = w.urine + w.solids + w.loads
+        others = {n: (lambda f, n=n: f[n]) for n in ("displacement", "pressure", "solid_pressure")
+                  if n in pb.field_names}
+        velocity = direction(pb, {"velocity": lambda f: f["displacement"]})
+        wall_jacobian = fem.form(pb.bdf[0] / pb.dt * ufl.derivative(R_wall, pb.x, velocity)
+                                 + ufl.derivative(R_wall, pb.x, direction(pb, others)))
+        v_trial = ufl.split(ufl.TrialFunction(pb.W))[pb.index["velocity"]]
+        psi = ufl.split(ufl.TestFunction(pb.W))[pb.index["displacement"]]
+        mass_form = fem.form(forms.kinematic_mass(pb.ops, pb.scene, v_trial, psi, dxw))
+        solid_cells = pb.cells(pb.solid_tags)
+        wall = BlockForms(fem.form(R_wall), wall_jacobian,
+                          sparsity.coupled_matrix(pb.W, pb.field_names, urine_cells, pb.solid_regions(),
+                                                  part="wall"),
+                          mass=(mass_form, sparsity.pattern_matrix(
+                              pb.W, pb.field_names, [(solid_cells, ["displacement"], ["velocity"])],
+                              np.arange(pb.x.vector.getLocalSize(), dtype=np.int32))))
+    return PartitionedCoupling(pb, splits, flow, wall, pb.options.block_iterations)
+
+
+def cells_touching(pb, cells: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+    """Those of `cells` (local) with a velocity dof among the owned local `dofs` of any rank."""
+    marker = fem.Function(pb.W)
+    marker.x.array[dofs] = 1.0
+    marker.x.scatter_reverse(ScatterMode.add)
+    marker.x.scatter_forward()
+    cell_dofs = sparsity.cell_dofs(pb.W, pb.field_names, "velocity")[cells]
+    return cells[(marker.x.array[cell_dofs] > 0).any(axis=1)]

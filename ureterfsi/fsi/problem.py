@@ -24,9 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import ufl
 from dolfinx import fem
-from dolfinx import mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
-from dolfinx.la import ScatterMode
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -38,7 +36,7 @@ from .materials import LinearElastic, MooneyRivlin
 from .mesh_motion import Extension, PrescribedMap
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
-from .partitioned import BlockForms, PartitionedCoupling
+from .partitioned import PartitionedCoupling, partitioned_coupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
@@ -470,72 +468,13 @@ class MonolithicFSI:
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
-    def _direction(self, components: dict):
-        """A direction in W for ufl.derivative: {field: its components as a function of {field: components of the
-        trial function}} (other fields 0)."""
-        trial, parts, offset = ufl.TrialFunction(self.W), [], 0
-        fields = {}
-        for name, element in zip(self.field_names, self.W.ufl_element().sub_elements()):
-            n = element.value_size()
-            fields[name] = [trial[offset + i] for i in range(n)]
-            offset += n
-        for name in self.field_names:
-            expr = components.get(name)
-            parts += (list(expr(fields)) if expr is not None else [ufl.as_ufl(0.0)] * len(fields[name]))
-        return ufl.as_vector(parts)
-
     def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
-        """The partitioned strategy (fsi.partitioned). The urine's rows: the residual but the solids' volume terms,
-        differentiated in the velocity and pressure directions. The wall's rows (solid_block "condensed"): the
-        residual over the solid cells and the urine cells touching them (`terms`(dx) with that measure),
-        differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
-        solids' mass matrix."""
+        """The partitioned strategy (fsi.partitioned.partitioned_coupling) on the residual's terms `whole` and
+        `terms`(dx), the same terms with another cell measure."""
         if self.segregated or not self.fluid_tags or not self.solid_tags:
             raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
                              "mesh_motion_coupling 'monolithic'")
-        own = self.options.jacobian_sparsity == "couplings"
-        R_flow = whole.urine + whole.loads
-        flow_jacobian = fem.form(ufl.derivative(R_flow, self.x, self._direction(
-            {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})))
-        flow = BlockForms(fem.form(R_flow), flow_jacobian,
-                          sparsity.coupled_matrix(self.W, self.field_names, self.cells(self.fluid_tags), [], part="flow")
-                          if own else fem_petsc.create_matrix(flow_jacobian))
-        splits = self.coupled_splits()
-        wall = None
-        if self.options.solid_block == "condensed":
-            urine_cells = self._cells_touching(self.cells(self.fluid_tags), splits["solid"])
-            wall_cells = np.union1d(self.cells(self.solid_tags), urine_cells)
-            tags = self.scene.cell_tags
-            keep = np.isin(tags.indices, wall_cells)
-            wall_tags = dmesh.meshtags(self.mesh, self.mesh.topology.dim, tags.indices[keep], tags.values[keep])
-            dxw = ufl.Measure("dx", domain=self.mesh, subdomain_data=wall_tags, metadata=self.dx.metadata())
-            w = terms(dxw)
-            R_wall = w.urine + w.solids + w.loads
-            others = {n: (lambda f, n=n: f[n]) for n in ("displacement", "pressure", "solid_pressure")
-                      if n in self.field_names}
-            velocity = self._direction({"velocity": lambda f: f["displacement"]})
-            wall_jacobian = fem.form(self.bdf[0] / self.dt * ufl.derivative(R_wall, self.x, velocity)
-                                     + ufl.derivative(R_wall, self.x, self._direction(others)))
-            v_trial = ufl.split(ufl.TrialFunction(self.W))[self.index["velocity"]]
-            psi = ufl.split(ufl.TestFunction(self.W))[self.index["displacement"]]
-            mass_form = fem.form(forms.kinematic_mass(self.ops, self.scene, v_trial, psi, dxw))
-            solid_cells = self.cells(self.solid_tags)
-            wall = BlockForms(fem.form(R_wall), wall_jacobian,
-                              sparsity.coupled_matrix(self.W, self.field_names, urine_cells, self.solid_regions(),
-                                                      part="wall"),
-                              mass=(mass_form, sparsity.pattern_matrix(
-                                  self.W, self.field_names, [(solid_cells, ["displacement"], ["velocity"])],
-                                  np.arange(self.x.vector.getLocalSize(), dtype=np.int32))))
-        return PartitionedCoupling(self, splits, flow, wall, self.options.block_iterations)
-
-    def _cells_touching(self, cells: np.ndarray, dofs: np.ndarray) -> np.ndarray:
-        """Those of `cells` (local) with a velocity dof among the owned local `dofs` of any rank."""
-        marker = fem.Function(self.W)
-        marker.x.array[dofs] = 1.0
-        marker.x.scatter_reverse(ScatterMode.add)
-        marker.x.scatter_forward()
-        cell_dofs = sparsity.cell_dofs(self.W, self.field_names, "velocity")[cells]
-        return cells[(marker.x.array[cell_dofs] > 0).any(axis=1)]
+        return partitioned_coupling(self, whole, terms)
 
     def factor_matrix(self):
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
