@@ -165,3 +165,23 @@ def test_a_solid_node_constraining_one_of_velocity_and_displacement_is_not_conde
     with pytest.raises(ValueError, match="constrain the velocity or the displacement but not both"):
         MonolithicFSI(case.scene, SolverOptions(coupling_scheme="partitioned", **TOL))
     MonolithicFSI(case.scene, SolverOptions(coupling_scheme="partitioned", solid_block="whole", **TOL))
+
+
+def test_a_failed_block_factorisation_names_the_block_and_mumps_status():
+    """A block LU that fails ends the sweeps with the block's name, PETSc's reason and MUMPS's INFOG codes."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", **TOL))
+
+    class FailingFactorisation:
+        def __init__(self, ksp):
+            self._ksp = ksp
+
+        def __getattr__(self, name):
+            return getattr(self._ksp, name)
+
+        def getConvergedReason(self):
+            return -11
+
+    factor = pb.partitioned.factors["flow"]
+    factor.ksp = FailingFactorisation(factor.ksp)
+    with pytest.raises(NewtonDivergence, match=r"flow block: LU failed \(PETSc KSP reason -11; MUMPS INFOG\(1\) = "):
+        pb.solve_steady()

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from petsc4py import PETSc
 
-from .linear_solvers import mumps_options
+from .linear_solvers import mumps_options, mumps_status
 from .sparsity import cell_dofs
 
 KINEMATIC_RTOL = 1e-10        # the condensed operator's kinematic rows vanish to this part of (b0/dt) ||M||
@@ -111,9 +111,7 @@ class CondensedSolidFactor:
         self.ksp.solve(self.rhs, self.dxR)
         reason = self.ksp.getConvergedReason()
         if reason < 0:
-            f = self.ksp.getPC().getFactorMatrix()
-            return (f"LU failed (PETSc KSP reason {reason}; MUMPS INFOG(1) = {f.getMumpsInfog(1)}, "
-                    f"INFOG(2) = {f.getMumpsInfog(2)}: -8/-9/-13 workspace or memory, -10 singular)")
+            return f"LU failed (PETSc KSP reason {reason}{mumps_status(self.ksp.getPC().getFactorMatrix())})"
         xa, dxR = x.array, self.dxR.array_r
         xa[self.r_pos] = dxR
         xa[self.v_pos] = self.rate * dxR[self.paired_in_r]

@@ -33,8 +33,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import forms, sparsity
-from .condensation import CondensedSolidFactor, kinematic_pairs
-from .linear_solvers import SPLITS, mumps_options
+from .condensation import CondensedSolidFactor, direct, kinematic_pairs
+from .linear_solvers import SPLITS, mumps_status
 from .newton import NewtonDivergence, fields_off, measure_field_increments
 
 # the order of a sweep: the wall first (it drives the flow), then the mesh it moves, then the urine
@@ -45,13 +45,7 @@ class BlockFactor:
     """LU (MUMPS) of a diagonal block A[I, I] of a matrix, kept until `refresh`."""
 
     def __init__(self, comm, prefix: str, workspace_percent: int):
-        self.ksp = PETSc.KSP().create(comm)
-        self.ksp.setOptionsPrefix(prefix)
-        o = PETSc.Options()
-        for key, value in ({"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-                           | mumps_options(workspace_percent)).items():
-            o[f"{prefix}{key}"] = value
-        self.ksp.setFromOptions()
+        self.ksp = direct(comm, prefix, "lu", workspace_percent)
         self.block = None
         self.rate = None                  # b0/dt of the Jacobian it was factorised from
 
@@ -70,9 +64,7 @@ class BlockFactor:
         reason = self.ksp.getConvergedReason()
         if reason >= 0:
             return ""
-        f = self.ksp.getPC().getFactorMatrix()
-        return (f"LU failed (PETSc KSP reason {reason}; MUMPS INFOG(1) = {f.getMumpsInfog(1)}, "
-                f"INFOG(2) = {f.getMumpsInfog(2)}: -8/-9/-13 workspace or memory, -10 singular)")
+        return f"LU failed (PETSc KSP reason {reason}{mumps_status(self.ksp.getPC().getFactorMatrix())})"
 
 
 @dataclass
