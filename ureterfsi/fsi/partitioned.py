@@ -126,14 +126,18 @@ class PartitionedCoupling:
             self.work[n] = sub.duplicate()
             pb.x.vector.restoreSubVector(self.index[n], sub)
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
-        pb.counters |= {"sweeps": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
+        self.kept_steps, self.kept = [], []     # Anderson's differences (dx, dG) kept from earlier steps
+        self.kept_rate = math.nan               # and the b0/dt they were made at
+        pb.counters |= {"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
         pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_solid_jacobian": 0.0, "assemble_block_rows": 0.0}
 
     def invalidate(self) -> None:
-        """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator)."""
+        """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator) and forget
+        the mixing's differences of earlier steps."""
         for n in ("solid", "flow"):
             self.factors[n].rate = None
+        self.kept_steps, self.kept = [], []
 
     # ---------------------------------------------------------------------------------------
     def refresh(self, name: str) -> None:
@@ -202,6 +206,8 @@ class PartitionedCoupling:
             if not math.isfinite(norm):
                 vec.restoreSubVector(index, rb)
                 raise NewtonDivergence(f"non-finite residual in the {name} block", [norm])
+            if self.condensed and name == "solid":
+                self.keep_kinematics(rb)
             stale = previous is not None and norm > o.block_reuse_contraction * previous
             if not self._current(name) or stale or not o.reuse_jacobian:
                 self.refresh(name)
@@ -236,13 +242,16 @@ class PartitionedCoupling:
 
     def _anderson(self, xs: list, gs: list, w: np.ndarray) -> np.ndarray:
         """Anderson mixing (Walker & Ni 2011, type II; IQN-ILS of Degroote et al. 2009 on the whole state) of the
-        fixed point x = G(x) from the owned parts of the last iterates x_i and G(x_i):
-        x+ = G(x_k) - sum_i gamma_i (G(x_i+1) - G(x_i)), gamma = argmin ||f_k - sum_i gamma_i (f_i+1 - f_i)||_w,
-        f = G(x) - x, the norm weighted by w (one Gram matrix reduced over the ranks)."""
-        f = [(g - x) * w for x, g in zip(xs, gs)]
-        dF = np.array([b - a for a, b in zip(f[:-1], f[1:])])
-        dG = np.array([b - a for a, b in zip(gs[:-1], gs[1:])])
-        local = np.concatenate([(dF @ dF.T).ravel(), dF @ f[-1]])
+        fixed point x = G(x) from the owned parts of the last iterates x_i and G(x_i), and the differences kept from
+        earlier steps (`self.kept`, IQN-ILS with reuse, Degroote & Vierendeels 2011):
+        x+ = G(x_k) - sum_i gamma_i dG_i, gamma = argmin ||f_k - sum_i gamma_i dF_i||_w, f = G(x) - x,
+        dF_i, dG_i the differences of f and G between successive iterates, the norm weighted by w (one Gram matrix
+        reduced over the ranks)."""
+        dX = [b - a for a, b in zip(xs[:-1], xs[1:])] + [d for d, _ in self.kept]
+        dG = np.array([b - a for a, b in zip(gs[:-1], gs[1:])] + [g for _, g in self.kept])
+        dF = (dG - np.array(dX)) * w
+        f = (gs[-1] - xs[-1]) * w
+        local = np.concatenate([(dF @ dF.T).ravel(), dF @ f])
         total = np.empty_like(local)
         self.pb.comm.Allreduce(local, total, op=MPI.SUM)
         m = len(dF)
@@ -250,25 +259,52 @@ class PartitionedCoupling:
         gamma = np.linalg.lstsq(gram + 1e-14 * np.trace(gram) * np.eye(m), rhs, rcond=None)[0]
         return gs[-1] - dG.T @ gamma
 
-    def hold_kinematics(self) -> float:
-        """Make the solids' kinematic rows hold (the condensed wall keeps them; an extrapolated state breaks them):
-        the paired velocities += M^-1 r_U of the residual in problem.b; returns the residual norm after."""
-        pb, index = self.pb, self.index["solid"]
-        rb = pb.b.getSubVector(index)
-        y = self.factors["solid"].kinematic_correction(rb)
-        pb.b.restoreSubVector(index, rb)
-        xb = pb.x.vector.getSubVector(index)
-        xb.array[self.factors["solid"].v_pos] += y
-        pb.x.vector.restoreSubVector(index, xb)
+    def _keep(self, xs: list, gs: list) -> None:
+        """Keep the differences of this step's sweeps (newest first) for the next anderson_reuse steps' mixing."""
+        o = self.pb.options
+        if not o.anderson_reuse:
+            return
+        new = [(b - a, d - c) for a, b, c, d in zip(xs[:-1], xs[1:], gs[:-1], gs[1:])]
+        if not math.isclose(self.kept_rate, self.pb._rate(), rel_tol=1e-12):
+            self.kept_steps = []                  # differences of another b0/dt: another fixed-point map
+        self.kept_rate = self.pb._rate()
+        self.kept_steps.insert(0, new[::-1])
+        del self.kept_steps[o.anderson_reuse:]
+        self.kept = [pair for step in self.kept_steps for pair in step][:max(o.anderson_depth, 1) * o.anderson_reuse]
+
+    def keep_kinematics(self, rb: PETSc.Vec) -> bool:
+        """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
+        velocities += M^-1 r_U of the solid split's residual `rb`. The condensed wall solve keeps these rows but
+        cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs before each
+        condensed solve: after the extrapolated guess of a step, and after a mixing that used other steps'
+        differences. Returns whether it corrected."""
+        pb, factor = self.pb, self.factors["solid"]
+        y = factor.kinematic_correction(rb)
+        if pb.comm.allreduce(float(np.abs(y).max(initial=0.0)), op=MPI.MAX) <= pb.options.newton_increment_floor:
+            return False
+        xb = pb.x.vector.getSubVector(self.index["solid"])
+        xb.array[factor.v_pos] += y
+        pb.x.vector.restoreSubVector(self.index["solid"], xb)
         pb.x.x.scatter_forward()
-        return pb._assemble_residual()
+        pb.counters["kinematic_corrections"] += 1
+        return True
+
+    def hold_kinematics(self) -> float:
+        """keep_kinematics on the whole residual in problem.b; returns the residual norm after (re-assembled if it
+        corrected)."""
+        pb = self.pb
+        rb = pb.b.getSubVector(self.index["solid"])
+        corrected = self.keep_kinematics(rb)
+        pb.b.restoreSubVector(self.index["solid"], rb)
+        return pb._assemble_residual() if corrected else pb.b.norm()
 
     def _fields_off(self, rtol: float | None) -> dict:
         return fields_off(self.field_increments, self.pb._field_owned, rtol, self.pb.options.newton_increment_floor)
 
     def solve(self):
-        """Solve R(x) = 0 for the current step by sweeps, Anderson-mixed over the last anderson_depth of them.
-        Returns (sweeps, history of residual norms)."""
+        """Solve R(x) = 0 for the current step by sweeps, Anderson-mixed over the last anderson_depth of them
+        (and the differences of the last anderson_reuse steps' sweeps). Returns (sweeps, history of residual
+        norms)."""
         pb, o = self.pb, self.pb.options
         self.field_increments = {}
         r = r0 = pb._assemble_residual()
@@ -277,6 +313,8 @@ class PartitionedCoupling:
         history = [r]
         n = pb.x.vector.getLocalSize()                  # owned entries of the state
         xs, gs = [], []
+        if self.kept and not math.isclose(self.kept_rate, pb._rate(), rel_tol=1e-12):
+            self.kept_steps, self.kept = [], []
         for sweep in range(o.newton_max_iterations):
             if not math.isfinite(r):
                 raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)
@@ -287,23 +325,25 @@ class PartitionedCoupling:
             pb.counters["sweeps"] += 1
             change = before - pb.x.x.array[:n]          # the sweep's, for the engine's per-field test
             self.field_increments = measure_field_increments(change, pb.x.x.array, pb._field_owned, pb.comm)
+            if o.anderson_depth:
+                xs.append(before)
+                gs.append(pb.x.x.array[:n].copy())
+                del xs[:-(o.anderson_depth + 1)], gs[:-(o.anderson_depth + 1)]
             assembled = not self._fields_off(o.newton_field_rtol)
             if assembled:
                 r = pb._assemble_residual()
                 history.append(r)
                 if math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0):
+                    self._keep(xs, gs)
                     return sweep + 1, history
-            if o.anderson_depth:
-                xs.append(before)
-                gs.append(pb.x.x.array[:n].copy())
-                del xs[:-(o.anderson_depth + 1)], gs[:-(o.anderson_depth + 1)]
-                if len(xs) > 1:
-                    pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
-                    pb.x.x.scatter_forward()
-                    assembled = False
+            if o.anderson_depth and (len(xs) > 1 or self.kept):
+                pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
+                pb.x.x.scatter_forward()
+                assembled = False
             if not assembled:
                 r = pb._assemble_residual()
                 history.append(r)
+        self.invalidate()
         off = ", ".join(f"{f} {v:.1e}" for f, v in self._fields_off(o.newton_field_rtol).items())
         raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} block Gauss-Seidel sweeps"
                           + (f" (last change relative to the field: {off})" if off else ""), history)

@@ -39,7 +39,8 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
                          krylov_rtol=s["krylov_rtol"], krylov_forcing=s["krylov_forcing"],
                          krylov_refactorise_iterations=s["krylov_refactorise_iterations"],
                          coupling_scheme=s["fully_coupled_scheme"] if fully_coupled else "monolithic",
-                         anderson_depth=s["anderson_depth"], block_iterations=s["block_iterations"],
+                         anderson_depth=s["anderson_depth"], anderson_reuse=s["anderson_reuse"],
+                         block_iterations=s["block_iterations"],
                          block_reuse_contraction=s["block_reuse_contraction"], solid_block=s["solid_block"])
 
 
