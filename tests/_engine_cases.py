@@ -255,3 +255,16 @@ class QoIObserver(Observer):
 
     def load_state(self, state):
         self.records = {k: list(v) for k, v in state.items()}
+
+
+class FailingFactorisation:
+    """A KSP that solves as `ksp` does but reports KSP_DIVERGED_PC_FAILED (-11): a failed factorisation."""
+
+    def __init__(self, ksp):
+        self._ksp = ksp
+
+    def __getattr__(self, name):
+        return getattr(self._ksp, name)
+
+    def getConvergedReason(self):
+        return -11

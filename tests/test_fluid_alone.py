@@ -24,6 +24,7 @@ from dolfinx.fem import petsc as fem_petsc
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from _engine_cases import FailingFactorisation
 from ureterfsi.fsi import (DirichletCondition, FluidRegion, MonolithicFSI, NewtonianFluid, OpenBoundary,
                            Scene, SolverOptions)
 from ureterfsi.fsi import physics
@@ -184,18 +185,6 @@ def test_failed_factorisation_is_reported_not_used():
                              DirichletCondition("displacement", [AXIS], components=[0])],
                   axisymmetric=True)
     pb = MonolithicFSI(scene, SolverOptions())
-
-
-    class FailingFactorisation:           # the real solver, reporting KSP_DIVERGED_PC_FAILED
-        def __init__(self, ksp):
-            self._ksp = ksp
-
-        def __getattr__(self, name):
-            return getattr(self._ksp, name)
-
-        def getConvergedReason(self):
-            return -11
-
     pb.ksp = FailingFactorisation(pb.ksp)
     from ureterfsi.fsi import NewtonDivergence
     with pytest.raises(NewtonDivergence, match=r"linear solve failed \(PETSc KSP reason -11\); MUMPS INFOG\(1\)"):

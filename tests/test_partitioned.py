@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from _engine_cases import WALL_ENDS, field_errors, tube_case, tube_problem, tube_reference, tube_run
+from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
+                           tube_run)
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
 from ureterfsi.fsi.condensation import CondensedSolidFactor
 from ureterfsi.fsi.partitioned import BlockFactor
@@ -170,16 +171,6 @@ def test_a_solid_node_constraining_one_of_velocity_and_displacement_is_not_conde
 def test_a_failed_block_factorisation_names_the_block_and_mumps_status():
     """A block LU that fails ends the sweeps with the block's name, PETSc's reason and MUMPS's INFOG codes."""
     pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", **TOL))
-
-    class FailingFactorisation:
-        def __init__(self, ksp):
-            self._ksp = ksp
-
-        def __getattr__(self, name):
-            return getattr(self._ksp, name)
-
-        def getConvergedReason(self):
-            return -11
 
     factor = pb.partitioned.factors["flow"]
     factor.ksp = FailingFactorisation(factor.ksp)
