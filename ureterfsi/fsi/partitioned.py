@@ -128,7 +128,8 @@ class PartitionedCoupling:
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         self.kept_steps, self.kept = [], []     # Anderson's differences (dx, dG) kept from earlier steps
         self.kept_rate = math.nan               # and the b0/dt they were made at
-        pb.counters |= {"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER} | {f"{n}_factorisations": 0 for n in ORDER}
+        pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER}
+                        | {f"{n}_factorisations": 0 for n in ORDER})
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
         pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_solid_jacobian": 0.0, "assemble_block_rows": 0.0}
 
@@ -265,9 +266,6 @@ class PartitionedCoupling:
         if not o.anderson_reuse:
             return
         new = [(b - a, d - c) for a, b, c, d in zip(xs[:-1], xs[1:], gs[:-1], gs[1:])]
-        if not math.isclose(self.kept_rate, self.pb._rate(), rel_tol=1e-12):
-            self.kept_steps = []                  # differences of another b0/dt: another fixed-point map
-        self.kept_rate = self.pb._rate()
         self.kept_steps.insert(0, new[::-1])
         del self.kept_steps[o.anderson_reuse:]
         self.kept = [pair for step in self.kept_steps for pair in step][:max(o.anderson_depth, 1) * o.anderson_reuse]
@@ -313,8 +311,8 @@ class PartitionedCoupling:
         history = [r]
         n = pb.x.vector.getLocalSize()                  # owned entries of the state
         xs, gs = [], []
-        if self.kept and not math.isclose(self.kept_rate, pb._rate(), rel_tol=1e-12):
-            self.kept_steps, self.kept = [], []
+        if not math.isclose(self.kept_rate, pb._rate(), rel_tol=1e-12):     # another b0/dt: another fixed point
+            self.kept_steps, self.kept, self.kept_rate = [], [], pb._rate()
         for sweep in range(o.newton_max_iterations):
             if not math.isfinite(r):
                 raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)
@@ -367,14 +365,15 @@ def direction(pb, components: dict):
 
 def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
     """The partitioned strategy on MonolithicFSI `pb` (a coupled scene, monolithic mesh motion) with the residual's
-    terms `whole` and `terms`(dx) (the same terms with another cell measure). The urine's rows: the residual but the solids' volume terms,
-    differentiated in the velocity and pressure directions. The wall's rows (solid_block "condensed"): the
-    residual over the solid cells and the urine cells touching them (`terms`(dx) with that measure),
-    differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
+    terms `whole` and `terms`(dx) (the same terms with another cell measure). The urine's rows: the residual but the
+    solids' volume terms, differentiated in the velocity and pressure directions. The wall's rows (solid_block
+    "condensed"): the residual over the solid cells and the urine cells touching them (`terms`(dx) with that
+    measure), differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
     solids' mass matrix."""
     own = pb.options.jacobian_sparsity == "couplings"
     R_flow = whole.urine + whole.loads
-    flow_jacobian = fem.form(ufl.derivative(R_flow, pb.x, direction(pb, {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})))
+    urine = direction(pb, {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})
+    flow_jacobian = fem.form(ufl.derivative(R_flow, pb.x, urine))
     flow = BlockForms(fem.form(R_flow), flow_jacobian,
                       sparsity.coupled_matrix(pb.W, pb.field_names, pb.cells(pb.fluid_tags), [], part="flow")
                       if own else fem_petsc.create_matrix(flow_jacobian))
