@@ -202,7 +202,7 @@ def test_the_sweeps_restore_kinematic_rows_that_do_not_hold(reference_8_steps, m
     (whose rows do not hold) does not converge; with it, it reaches the solution."""
     from ureterfsi.fsi.partitioned import PartitionedCoupling
 
-    monkeypatch.setattr(PartitionedCoupling, "hold_kinematics", lambda self: self.pb._assemble_residual())
+    monkeypatch.setattr(PartitionedCoupling, "hold_kinematics", lambda self: self.pb.b.norm())
     pb, _ = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, steps=8, **TOL)
     assert max(field_errors(pb, reference_8_steps).values()) <= 1e-6
     assert pb.counters["kinematic_corrections"] >= 7, pb.counters
