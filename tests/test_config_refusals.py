@@ -404,6 +404,7 @@ SHIPPED = [
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/stricture.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/thin_gap.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/arrangement_offset.yaml"],
+    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/obstruction_sobol.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/ladder-mini.yaml",
      "tests/data/ladder-mini-passage.yaml"],

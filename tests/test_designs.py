@@ -368,6 +368,28 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
     assert not np.any(pb.mesh_displacement.x.array) and pb.mesh_motion_solver in ("lu", "cg_icc")
 
 
+def test_wall_motion_with_a_halved_step_serves_the_run():
+    """A wall solve that halved its first step (times 0, 0.01, 0.02, 0.04, ...: a soft wall under a stricture at
+    dt = 0.02 s) serves a run of that dt, which reads the wall at its own times; a record that misses a run time or
+    steps longer than dt is refused."""
+    from ureterfsi.study.oneway import WallHistory
+
+    cfg = load_config(BASE)
+    zi, zo = np.linspace(0.0, 0.05, 7), np.linspace(0.0, 0.05, 9)
+
+    def history(t):
+        t = np.asarray(t, float)
+        return WallHistory(t, zi, *(np.outer(t, np.full(zi.size, k + 1.0)) for k in range(4)), zo,
+                           np.outer(t, np.ones(zo.size)))
+
+    h = WallHistory.from_dataset(history([0, 0.01, 0.02, 0.04, 0.06, 0.08]).to_dataset(cfg), cfg, 0.08, 0.02)
+    for t in (0.02, 0.04, 0.08):
+        assert np.allclose(h.inner(zi, t), [np.full(zi.size, t * (k + 1.0)) for k in range(4)], rtol=1e-12, atol=0)
+    for bad in ([0, 0.01, 0.03, 0.05, 0.07, 0.08], [0, 0.04, 0.08]):
+        with pytest.raises(ValueError, match="in steps of 0.02 s"):
+            WallHistory.from_dataset(history(bad).to_dataset(cfg), cfg, 0.08, 0.02)
+
+
 @pytest.mark.parametrize("axisymmetric", [False, True])
 def test_map_min_jacobian_of_a_uniform_dilation(axisymmetric):
     """ureterfsi.study.oneway.map_min_jacobian of d = c t x (3D: J = (1 + c t)^3) and of d = (c t r, 0) in r-z
