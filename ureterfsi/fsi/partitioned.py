@@ -126,7 +126,7 @@ class PartitionedCoupling:
             self.work[n] = sub.duplicate()
             pb.x.vector.restoreSubVector(self.index[n], sub)
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
-        self.kept_steps, self.kept = [], []     # Anderson's differences (dx, dG) kept from earlier steps
+        self.kept = []                          # Anderson's differences (dx, dG) kept from earlier steps, newest first
         self.kept_rate = math.nan               # and the b0/dt they were made at
         pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER}
                         | {f"{n}_factorisations": 0 for n in ORDER})
@@ -138,7 +138,7 @@ class PartitionedCoupling:
         the mixing's differences of earlier steps."""
         for n in ("solid", "flow"):
             self.factors[n].rate = None
-        self.kept_steps, self.kept = [], []
+        self.kept = []
 
     # ---------------------------------------------------------------------------------------
     def refresh(self, name: str) -> None:
@@ -261,14 +261,13 @@ class PartitionedCoupling:
         return gs[-1] - dG.T @ gamma
 
     def _keep(self, xs: list, gs: list) -> None:
-        """Keep the differences of this step's sweeps (newest first) for the next anderson_reuse steps' mixing."""
+        """Keep the differences of this step's sweeps, newest first, with the earlier ones: the last
+        anderson_depth x anderson_reuse of them serve the next steps' mixing."""
         o = self.pb.options
         if not o.anderson_reuse:
             return
         new = [(b - a, d - c) for a, b, c, d in zip(xs[:-1], xs[1:], gs[:-1], gs[1:])]
-        self.kept_steps.insert(0, new[::-1])
-        del self.kept_steps[o.anderson_reuse:]
-        self.kept = [pair for step in self.kept_steps for pair in step][:max(o.anderson_depth, 1) * o.anderson_reuse]
+        self.kept = (new[::-1] + self.kept)[:o.anderson_depth * o.anderson_reuse]
 
     def keep_kinematics(self, rb: PETSc.Vec) -> bool:
         """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
@@ -312,7 +311,7 @@ class PartitionedCoupling:
         n = pb.x.vector.getLocalSize()                  # owned entries of the state
         xs, gs = [], []
         if not math.isclose(self.kept_rate, pb._rate(), rel_tol=1e-12):     # another b0/dt: another fixed point
-            self.kept_steps, self.kept, self.kept_rate = [], [], pb._rate()
+            self.kept, self.kept_rate = [], pb._rate()
         for sweep in range(o.newton_max_iterations):
             if not math.isfinite(r):
                 raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)

@@ -100,7 +100,7 @@ class SolverOptions:
     coupling_scheme: str = "monolithic"
     block_iterations: int = 3           # partitioned: updates of the solid and flow blocks per sweep, at most
     anderson_depth: int = 5             # partitioned: sweeps mixed by Anderson acceleration (0: plain sweeps)
-    anderson_reuse: int = 0             # partitioned: earlier steps whose sweeps' differences the mixing keeps
+    anderson_reuse: int = 0             # partitioned: the mixing keeps anderson_depth x this of earlier steps' sweeps
     # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
     # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
     block_reuse_contraction: float = 0.5
