@@ -9,8 +9,14 @@ displacement, F fluid velocity and pressure):
     x_F <- x_F - A_FF^-1 R_F(x)      repeated (the urine in the mesh just moved),
 
 a Dirichlet-Neumann iteration: the wall moves the urine's boundary, the urine's traction loads the wall in the
-next sweep. A step has converged when the residual test of Newton holds and no field changed over the last
-sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
+next sweep. A step has converged (sweep_convergence "contraction") when the a posteriori bound of a contraction,
+
+    ||G(x_k) - x*|| <= rho / (1 - rho) ||G(x_k) - x_k||,
+
+x* = G(x*) the step's solution, G one sweep, rho its contraction (the largest secant ratio
+||G(x_j) - G(x_j-1)|| / ||x_j - x_j-1|| of this step's sweeps and of the previous step's), is within newton_field_rtol
+in the max norm relative to each field; or ("residual") when the residual test of Newton holds and no field changed
+over the last sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
 and refreshed when its iteration contracts by less than block_reuse_contraction: A_SS from the whole Jacobian, A_MM the
 fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
 directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
@@ -128,6 +134,7 @@ class PartitionedCoupling:
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         self.kept = []                          # Anderson's differences (dx, dG) kept from earlier steps, newest first
         self.kept_rate = math.nan               # and the b0/dt they were made at
+        self.contraction = 0.0                  # the sweeps' contraction estimate of the last step (error_bound)
         pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER}
                         | {f"{n}_factorisations": 0 for n in ORDER})
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
@@ -135,10 +142,11 @@ class PartitionedCoupling:
 
     def invalidate(self) -> None:
         """Refactorise the solid and flow blocks at their next use (the mesh block is a fixed operator) and forget
-        the mixing's differences of earlier steps."""
+        the mixing's differences and the contraction estimate of earlier steps."""
         for n in ("solid", "flow"):
             self.factors[n].rate = None
         self.kept = []
+        self.contraction = 0.0
 
     # ---------------------------------------------------------------------------------------
     def refresh(self, name: str) -> None:
@@ -207,8 +215,11 @@ class PartitionedCoupling:
             if not math.isfinite(norm):
                 vec.restoreSubVector(index, rb)
                 raise NewtonDivergence(f"non-finite residual in the {name} block", [norm])
-            if self.condensed and name == "solid":
-                self.keep_kinematics(rb)
+            if self.condensed and name == "solid" and self.keep_kinematics(rb):
+                vec.restoreSubVector(index, rb)         # the corrected velocities load the wall's other rows
+                vec = self.block_residual(name)
+                rb = vec.getSubVector(index)
+                norm = rb.norm()
             stale = previous is not None and norm > o.block_reuse_contraction * previous
             if not self._current(name) or stale or not o.reuse_jacobian:
                 self.refresh(name)
@@ -232,7 +243,7 @@ class PartitionedCoupling:
 
     def _weights(self) -> np.ndarray:
         """Per owned dof 1 / max(||x_f||_inf, newton_increment_floor / newton_field_rtol) of its field, at the current
-        state: Anderson's least squares in units relative to each field (a field at rest, whose values are round-off,
+        state: the units relative to each field of Anderson's least squares and of the error bound (a field at rest, whose values are round-off,
         weighed as a 1e-4 SI one, not amplified)."""
         pb, o = self.pb, self.pb.options
         least = o.newton_increment_floor / (o.newton_field_rtol or o.newton_stol)
@@ -277,7 +288,7 @@ class PartitionedCoupling:
         differences. Returns whether it corrected."""
         pb, factor = self.pb, self.factors["solid"]
         y = factor.kinematic_correction(rb)
-        if pb.comm.allreduce(float(np.abs(y).max(initial=0.0)), op=MPI.MAX) <= pb.options.newton_increment_floor:
+        if self._largest(y) <= pb.options.newton_increment_floor:
             return False
         xb = pb.x.vector.getSubVector(self.index["solid"])
         xb.array[factor.v_pos] += y
@@ -285,6 +296,17 @@ class PartitionedCoupling:
         pb.x.x.scatter_forward()
         pb.counters["kinematic_corrections"] += 1
         return True
+
+    def _largest(self, values: np.ndarray) -> float:
+        return self.pb.comm.allreduce(float(np.abs(values).max(initial=0.0)), op=MPI.MAX)
+
+    def kinematic_defect(self) -> float:
+        """max |M^-1 r_U| of the whole residual in problem.b: how far the solids' kinematic rows, which no condensed
+        wall solve restores, are from holding (m/s)."""
+        rb = self.pb.b.getSubVector(self.index["solid"])
+        y = self.factors["solid"].kinematic_correction(rb)
+        self.pb.b.restoreSubVector(self.index["solid"], rb)
+        return self._largest(y)
 
     def hold_kinematics(self) -> float:
         """keep_kinematics on the whole residual in problem.b; returns the residual norm after (re-assembled if it
@@ -298,52 +320,105 @@ class PartitionedCoupling:
     def _fields_off(self, rtol: float | None) -> dict:
         return fields_off(self.field_increments, self.pb._field_owned, rtol, self.pb.options.newton_increment_floor)
 
+    def error_bound(self, xs: list, gs: list) -> float:
+        """Bound of the distance of G(x_k) = gs[-1] from the step's solution in the max norm relative to each field
+        (_weights): rho / (1 - rho) ||G(x_k) - x_k||, rho the largest secant ratio ||G(x_j) - G(x_j-1)|| / ||x_j - x_j-1||
+        of the owned iterates `xs` and their sweeps `gs` and of the previous step (self.contraction, updated here);
+        inf before two sweeps or when rho >= 1, 0 at a fixed point."""
+        w = self._weights()
+        local = [np.abs((gs[-1] - xs[-1]) * w).max(initial=0.0)]
+        for j in range(1, len(xs)):
+            local += [np.abs((gs[j] - gs[j - 1]) * w).max(initial=0.0), np.abs((xs[j] - xs[j - 1]) * w).max(initial=0.0)]
+        total = np.empty(len(local))
+        self.pb.comm.Allreduce(np.array(local), total, op=MPI.MAX)
+        change, pairs = total[0], total[1:].reshape(-1, 2)
+        if change == 0.0:
+            return 0.0
+        ratios = [dg / dx for dg, dx in pairs if dx > 0.0]
+        if not ratios:
+            return math.inf
+        self.step_contraction = max(ratios)
+        rho = max(self.step_contraction, self.contraction)
+        return rho / (1.0 - rho) * change if rho < 1.0 else math.inf
+
+    def _converged(self, xs: list, gs: list, r0: float, history: list) -> tuple[bool, bool]:
+        """The step's convergence test (module docstring) after a sweep: (converged, whether problem.b now holds the
+        whole residual at the current state); `history` gets the residual it assembles."""
+        pb, o = self.pb, self.pb.options
+        if o.sweep_convergence == "contraction":
+            self.bound = self.error_bound(xs, gs)
+            return self.bound <= (o.newton_field_rtol or o.newton_stol), False
+        if self._fields_off(o.newton_field_rtol):
+            return False, False
+        r = pb._assemble_residual()
+        history.append(r)
+        return math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0), True
+
+    def _check_accepted(self, r: float, sweeps: int, history: list) -> None:
+        """A fixed point of the sweeps solves every row a block solves; the contraction test sees nothing else.
+        Refuse an accepted state whose residual is not finite or whose kinematic rows (outside the condensed wall's
+        solve) do not hold."""
+        if not math.isfinite(r):
+            raise NewtonDivergence(f"non-finite residual after {sweeps} sweeps", history)
+        if self.condensed:
+            defect = self.kinematic_defect()
+            if defect > self.pb.options.newton_increment_floor:
+                self.invalidate()
+                raise NewtonDivergence(f"the sweeps' fixed point breaks the solids' kinematic rows (|M^-1 r_U| = "
+                                       f"{defect:.1e} m/s after {sweeps} sweeps)", history)
+
     def solve(self):
         """Solve R(x) = 0 for the current step by sweeps, Anderson-mixed over the last anderson_depth of them
-        (and the differences of the last anderson_reuse steps' sweeps). Returns (sweeps, history of residual
-        norms)."""
+        (and the differences of the last anderson_reuse steps' sweeps). Returns (sweeps, residual norms: the
+        step's first and, under "residual", each test's; the accepted state's last)."""
         pb, o = self.pb, self.pb.options
-        self.field_increments = {}
+        self.field_increments, self.bound, self.step_contraction = {}, math.inf, 0.0
         r = r0 = pb._assemble_residual()
         if self.condensed:
             r = r0 = self.hold_kinematics()
+        if not math.isfinite(r):
+            raise NewtonDivergence("non-finite residual at the step's start", [r])
         history = [r]
         n = pb.x.vector.getLocalSize()                  # owned entries of the state
-        xs, gs = [], []
+        xs, gs = [], []                                 # the sweeps' starts and results: the mixing's and the bound's
         if not math.isclose(self.kept_rate, pb._rate(), rel_tol=1e-12):     # another b0/dt: another fixed point
             self.kept, self.kept_rate = [], pb._rate()
+        assembled = True                                # problem.b holds the whole residual at the current state
         for sweep in range(o.newton_max_iterations):
-            if not math.isfinite(r):
-                raise NewtonDivergence(f"non-finite residual at sweep {sweep}", history)
             before = pb.x.x.array[:n].copy()
             scale = self._scales()
             for k, name in enumerate(ORDER):
-                self._block(name, scale, assembled=k == 0)
+                self._block(name, scale, assembled=assembled and k == 0)
             pb.counters["sweeps"] += 1
-            change = before - pb.x.x.array[:n]          # the sweep's, for the engine's per-field test
-            self.field_increments = measure_field_increments(change, pb.x.x.array, pb._field_owned, pb.comm)
-            if o.anderson_depth:
-                xs.append(before)
-                gs.append(pb.x.x.array[:n].copy())
-                del xs[:-(o.anderson_depth + 1)], gs[:-(o.anderson_depth + 1)]
-            assembled = not self._fields_off(o.newton_field_rtol)
-            if assembled:
-                r = pb._assemble_residual()
-                history.append(r)
-                if math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0):
-                    self._keep(xs, gs)
-                    return sweep + 1, history
+            xs.append(before)
+            gs.append(pb.x.x.array[:n].copy())
+            del xs[:-(max(o.anderson_depth, 1) + 1)], gs[:-(max(o.anderson_depth, 1) + 1)]
+            self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb._field_owned, pb.comm)
+            done, assembled = self._converged(xs, gs, r0, history)
+            if done:
+                if o.sweep_convergence == "contraction":
+                    r = pb._assemble_residual()         # the accepted state's: the step record, assemble_reaction
+                    history.append(r)
+                    self._check_accepted(r, sweep + 1, history)
+                self.contraction = self.step_contraction
+                self._keep(xs, gs)
+                return sweep + 1, history
             if o.anderson_depth and (len(xs) > 1 or self.kept):
                 pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
                 pb.x.x.scatter_forward()
                 assembled = False
-            if not assembled:
+            if o.sweep_convergence == "residual" and not assembled:
                 r = pb._assemble_residual()
                 history.append(r)
+                if not math.isfinite(r):
+                    raise NewtonDivergence(f"non-finite residual at sweep {sweep + 1}", history)
+                assembled = True
         self.invalidate()
         off = ", ".join(f"{f} {v:.1e}" for f, v in self._fields_off(o.newton_field_rtol).items())
+        bound = f"; error bound {self.bound:.1e}" if o.sweep_convergence == "contraction" else ""
         raise NewtonDivergence(f"no convergence in {o.newton_max_iterations} block Gauss-Seidel sweeps"
-                          + (f" (last change relative to the field: {off})" if off else ""), history)
+                               + (f" (last change relative to the field: {off}{bound})" if off or bound else ""),
+                               history)
 
 
 # --- the blocks' forms ----------------------------------------------------------------------

@@ -104,6 +104,10 @@ class SolverOptions:
     # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
     # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
     block_reuse_contraction: float = 0.5
+    # partitioned: a step has converged when the bound rho / (1 - rho) ||G(x) - x|| of the sweeps' contraction says
+    # every field is within newton_field_rtol of the step's solution ("contraction"), or when Newton's residual test
+    # holds and the last sweep changed no field by more than newton_field_rtol ("residual")
+    sweep_convergence: str = "contraction"
     # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
     # fsi.condensation) or "whole" (the block as it stands)
     solid_block: str = "condensed"
@@ -251,6 +255,8 @@ class MonolithicFSI:
         # --- algebra ------------------------------------------------------------------------
         if opts.solid_block not in ("condensed", "whole"):
             raise ValueError(f"solid_block 'condensed' or 'whole', got {opts.solid_block!r}")
+        if opts.sweep_convergence not in ("contraction", "residual"):
+            raise ValueError(f"sweep_convergence 'contraction' or 'residual', got {opts.sweep_convergence!r}")
         if opts.coupling_scheme not in ("monolithic", "partitioned"):
             raise ValueError(f"coupling_scheme 'monolithic' or 'partitioned', got {opts.coupling_scheme!r}")
         if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
