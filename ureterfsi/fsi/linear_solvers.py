@@ -12,7 +12,7 @@ an LU factorisation (MUMPS, METIS ordering) of each diagonal block:
 
 S the solid split (velocity and displacement dofs of solid cells, interface included; the solid pressure; the
 pinned fluid pressures; the Dirichlet rows of the fluid displacement), M the free fluid mesh displacement,
-F the fluid-only velocity and pressure (`MonolithicFSI.coupled_splits`). The upper blocks (fluid traction
+F the fluid-only velocity and pressure (`dofs.DofLayout.coupled_splits`). The upper blocks (fluid traction
 on the solid, A_SF, A_SM; the flow's shape derivatives on the mesh, A_MF = 0) are left to GMRES. The
 Krylov iteration runs on the current Jacobian, so a kept (older) block factor changes the iteration count,
 never the Newton iterate beyond the Krylov tolerance.

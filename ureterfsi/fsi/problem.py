@@ -30,6 +30,8 @@ from petsc4py import PETSc
 
 from . import forms, physics, sparsity
 from .ale_jacobian import ALEJacobian
+from .constraints import Constraints
+from .dofs import DofLayout
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              direct_package)
 from .materials import MooneyRivlin
@@ -41,25 +43,6 @@ from .partitioned import PartitionedCoupling, partitioned_coupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
-
-
-def dirichlet_bcs(cond, base, facet_tags) -> list:
-    """[(DirichletBC, value function, component)] of a DirichletCondition on the space `base` (a space or a
-    subspace of a mixed space): the whole vector, or each listed component; values start at zero."""
-    fdim = base.mesh.topology.dim - 1
-    facets = np.unique(np.concatenate([facet_tags.find(t) for t in cond.tags])).astype(np.int32)
-    out = []
-    for c in [None] if cond.components is None else list(cond.components):
-        space = base if c is None else base.sub(c)
-        if space.component():      # a subspace: the value lives in its collapsed space
-            collapsed, _ = space.collapse()
-            g = fem.Function(collapsed)
-            bc = fem.dirichletbc(g, fem.locate_dofs_topological((space, collapsed), fdim, facets), space)
-        else:
-            g = fem.Function(space)
-            bc = fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets))
-        out.append((bc, g, c))
-    return out
 
 
 def forget_options(prefix: str) -> None:
@@ -112,6 +95,7 @@ class MonolithicFSI:
         self.W = W = fem.FunctionSpace(mesh, ufl.MixedElement(list(elements.values())))
         self.index = {name: i for i, name in enumerate(self.field_names)}
         self.unknowns = W.dofmap.index_map.size_global * W.dofmap.index_map_bs
+        self.layout = DofLayout(W, self.field_names)
 
         self.x = fem.Function(W, name="state")
         self.x_n = fem.Function(W)
@@ -173,9 +157,13 @@ class MonolithicFSI:
         self.counters = {"factorisations": 0, "reused_solves": 0}
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
                         "mesh_motion": 0.0}
-        self._build_dirichlet()
-        self._build_pins_and_interface(fluid_tags, solid_tags, mr_tags)
-        self.bcs = self.dirichlet_bcs + self.pin_bcs
+        others = tuple(t for t in fluid_tags + solid_tags if t not in mr_tags)
+        self.constraints = Constraints(self.layout, scene.dirichlet, scene.facet_tags,
+                                       self.cells(fluid_tags) if fluid_tags else None,
+                                       self.cells(solid_tags) if solid_tags else None,
+                                       self.cells(others) if mr_tags else None,
+                                       (self.mesh_displacement, self._mesh_dofs) if self.segregated else None)
+        self.bcs = self.constraints.bcs
         if self.segregated:
             self._setup_mesh_motion(dx(fluid_tags))
 
@@ -200,12 +188,7 @@ class MonolithicFSI:
             self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
-        nloc = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
-        self._field_owned = {}          # {field: its owned local dofs}
-        for name in self.field_names:
-            dofs = np.asarray(self.sub(name).collapse()[1])
-            self._field_owned[name] = dofs[dofs < nloc]
-        self.nonlinear_solver = Newton(opts, self.x, self.dx_vec, self._field_owned, self.comm)
+        self.nonlinear_solver = Newton(opts, self.x, self.dx_vec, self.layout.field_owned, self.comm)
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
@@ -238,7 +221,7 @@ class MonolithicFSI:
         return [(self.cells(tuple(s.tags)), isinstance(s.material, MooneyRivlin)) for s in self.scene.solids]
 
     def sub(self, name):
-        return self.W.sub(self.index[name])
+        return self.layout.sub(name)
 
     def split(self, which=None):
         """UFL parts {field name: expression} of the current state (or of `which`, e.g. x_dot)."""
@@ -281,122 +264,23 @@ class MonolithicFSI:
         k.x.scatter_forward()
         return k
 
-    def _build_dirichlet(self):
-        """Scene Dirichlet conditions; time-dependent values are re-interpolated in `_update_bcs`.
-        In segregated mode the displacement conditions constrain the mesh-motion problem instead, and
-        every displacement dof of the Newton system mirrors the mesh displacement."""
-        self.dirichlet_bcs, self.mesh_bcs, self._bc_updates = [], [], []
-        for cond in self.scene.dirichlet:
-            if self.segregated and cond.field == "displacement":
-                self.mesh_bcs += self._conditions(cond, self.mesh_space)
-            else:
-                self.dirichlet_bcs += self._conditions(cond, self.sub(cond.field))
-        if self.segregated:
-            dofs = [np.asarray(self._mesh_dofs, dtype=np.int32), np.arange(len(self._mesh_dofs), dtype=np.int32)]
-            self.dirichlet_bcs.append(fem.dirichletbc(self.mesh_displacement, dofs, self.sub("displacement")))
-
-    def _conditions(self, cond, base):
-        bcs = []
-        for bc, g, comp in dirichlet_bcs(cond, base, self.scene.facet_tags):
-            bcs.append(bc)
-            if cond.value is not None:
-                self._bc_updates.append((g, cond.value, comp))
-        return bcs
-
-    def _update_bcs(self, t):
-        for g, value, comp in self._bc_updates:
-            if comp is None:
-                g.interpolate(lambda x: value(x, t))
-            else:
-                g.interpolate(lambda x: np.asarray(value(x, t)).reshape(-1))
-
-    def _build_pins_and_interface(self, fluid_tags, solid_tags, mr_tags):
-        tdim = self.mesh.topology.dim
-        zero = PETSc.ScalarType(0.0)
-        self.pin_bcs = []
-        fluid_cells, solid_cells = self.cells(fluid_tags), self.cells(solid_tags)
-        if "pressure" in self.index and solid_tags:
-            P = self.sub("pressure")
-            in_fluid = fem.locate_dofs_topological(P, tdim, fluid_cells)
-            in_solid = fem.locate_dofs_topological(P, tdim, solid_cells)
-            pinned = np.setdiff1d(in_solid, in_fluid).astype(np.int32)
-            self.pin_bcs.append(fem.dirichletbc(zero, pinned, P))
-        if "solid_pressure" in self.index:
-            others = self.cells(tuple(t for t in fluid_tags + solid_tags if t not in mr_tags))
-            Q = self.sub("solid_pressure")
-            self.pin_bcs.append(fem.dirichletbc(zero, fem.locate_dofs_topological(Q, tdim, others), Q))
-        # mesh-motion rows removed at interface displacement dofs (and at Dirichlet rows)
-        U = self.sub("displacement")
-        if fluid_tags and solid_tags:
-            interface = np.intersect1d(fem.locate_dofs_topological(U, tdim, fluid_cells),
-                                       fem.locate_dofs_topological(U, tdim, solid_cells))
-        else:
-            interface = np.zeros(0, np.int32)
-        bs = self.W.dofmap.index_map_bs
-        nloc = self.W.dofmap.index_map.size_local * bs
-        rows = np.unique(np.concatenate([interface] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs]))
-        rows = rows[rows < nloc]
-        offset = self.W.dofmap.index_map.local_range[0] * bs
-        self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
-        self._mesh_excluded_local = rows.astype(np.int32)
-
-    def field_is(self, groups: dict) -> list:
-        """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
-        offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
-        out = []
-        for name, fields in groups.items():
-            dofs = np.sort(np.concatenate([self._field_owned[f] for f in fields])) + offset
-            out.append((name, PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=self.comm)))
-        return out
-
-    def _owned(self, local_dofs) -> np.ndarray:
-        """Sorted owned local dofs marked by `local_dofs` on any process (ghost marks summed to the owner)."""
-        marker = fem.Function(self.W)
-        marker.x.array[np.asarray(local_dofs, dtype=np.int64)] = 1.0
-        vec = marker.vector
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return np.flatnonzero(vec.array_r > 0.0).astype(np.int32)
-
-    def coupled_splits(self) -> dict:
-        """Owned local dofs of the splits of the coupled Newton system (linear_solvers.BlockGaussSeidel):
-        "solid" = velocity and displacement on solid cells (the interface included), the solid pressure, the
-        pinned fluid pressures and the Dirichlet rows of the fluid displacement; "mesh" = the other (free) fluid
-        mesh displacement; "flow" = the fluid-only velocity and the fluid pressure."""
-        tdim = self.mesh.topology.dim
-        solid_cells = self.cells(self.solid_tags)
-        collapsed = {f: np.asarray(self.sub(f).collapse()[1]) for f in self.field_names}
-        parts = [fem.locate_dofs_topological(self.sub(f), tdim, solid_cells) for f in ("velocity", "displacement")]
-        parts += [collapsed["solid_pressure"]] if "solid_pressure" in collapsed else []
-        parts += [bc.dof_indices()[0] for bc in self.pin_bcs]
-        dirichlet = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs])
-        parts.append(np.intersect1d(dirichlet, collapsed["displacement"]))
-        solid = self._owned(np.concatenate(parts))
-        mesh = np.setdiff1d(self._owned(collapsed["displacement"]), solid)
-        nloc = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
-        flow = np.setdiff1d(np.arange(nloc, dtype=np.int32), np.union1d(solid, mesh))
-        return {"solid": solid, "mesh": mesh, "flow": flow}
-
-    def _split_is(self, splits: dict) -> dict:
-        """{name: PETSc IS of the global indices} of {name: owned local dofs}."""
-        offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
-        return {name: PETSc.IS().createGeneral((dofs + offset).astype(PETSc.IntType), comm=self.comm)
-                for name, dofs in splits.items()}
-
     def _linear_solver(self, prefix) -> LinearSolver:
         """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block
         (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
         o = self.options
         if o.linear_solver == "fieldsplit":
-            splits = self.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
-                                    "pressure": ["pressure"]})
+            splits = self.layout.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
+                                           "pressure": ["pressure"]})
             return SchurFieldsplit(self.ksp, prefix, splits, o.krylov_rtol, o.krylov_max_iterations, self.counters)
         if o.linear_solver == "block_gauss_seidel":
-            return BlockGaussSeidel(self.ksp, prefix, self._split_is(self.coupled_splits()), o.krylov_rtol,
+            splits = self.layout.coupled_splits(self.cells(self.solid_tags), self.constraints.pins,
+                                                self.constraints.dirichlet)
+            return BlockGaussSeidel(self.ksp, prefix, self.layout.split_is(splits), o.krylov_rtol,
                                     o.krylov_max_iterations, o.krylov_refactorise_iterations, self.counters,
                                     self.timings, workspace_percent=o.mumps_workspace_percent)
         if self.segregated:
-            splits = self.field_is({"mirror": ["displacement"],
-                                    "flow": [f for f in self.field_names if f != "displacement"]})
+            splits = self.layout.field_is({"mirror": ["displacement"],
+                                           "flow": [f for f in self.field_names if f != "displacement"]})
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
@@ -417,7 +301,7 @@ class MonolithicFSI:
         above SolverOptions.mesh_motion_direct_max_unknowns)."""
         d = self.mesh_displacement
         if self.scene.mesh_motion is not None:
-            self.mesh_motion = PrescribedMap(d, self.mesh_bcs, self.scene.mesh_motion, self.comm)
+            self.mesh_motion = PrescribedMap(d, self.constraints.mesh, self.scene.mesh_motion, self.comm)
             return
         V, o = self.mesh_space, self.options
         a = physics.mesh_motion_residual(self.ops, o.mesh_motion, ufl.TrialFunction(V), ufl.TestFunction(V),
@@ -425,7 +309,7 @@ class MonolithicFSI:
         L = ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())), ufl.TestFunction(V)) * dx_fluid
         limit = o.mesh_motion_direct_max_unknowns
         unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-        self.mesh_motion = Extension(d, self.mesh_bcs, a, L, self.comm,
+        self.mesh_motion = Extension(d, self.constraints.mesh, a, L, self.comm,
                                      iterative=limit is not None and unknowns > limit,
                                      package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
                                      prefix=f"{self.options_prefix}mesh_", counters=self.counters,
@@ -468,7 +352,7 @@ class MonolithicFSI:
         saved, mismatch = d.x.array.copy(), motion.mismatch
 
         def at(t: float) -> fem.Function:
-            self._update_bcs(t)
+            self.constraints.update(t)
             motion.solve(t, d.x.array.copy())
             return d
 
@@ -477,7 +361,7 @@ class MonolithicFSI:
         finally:
             d.x.array[:] = saved
             motion.mismatch = mismatch
-            self._update_bcs(self.time)
+            self.constraints.update(self.time)
 
     def min_ale_jacobian(self) -> float:
         """Minimum det(I + Grad u) over the fluid mesh (1 when undeformed, <= 0 when inverted)."""
@@ -501,7 +385,7 @@ class MonolithicFSI:
                 loc.set(0.0)
             fem_petsc.assemble_vector(bm, self.mesh_form)
             bm.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            bm.array_w[self._mesh_excluded_local] = 0.0
+            bm.array_w[self.constraints.mesh_rows_local] = 0.0
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.copy(self._b_free)       # the physics residual before constraints: after a converged step, the reaction
         if self.mesh_form is not None:
@@ -529,7 +413,7 @@ class MonolithicFSI:
         if not self._mesh_jacobian_ready:
             fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
             Am.assemble()
-            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            Am.zeroRows(self.constraints.mesh_rows, diag=0.0)
             self._mesh_jacobian_ready = True
         return Am
 
@@ -599,7 +483,7 @@ class MonolithicFSI:
         self.set_bdf(dt)
         t_new = self.time + dt
         self.t.value = t_new
-        self._update_bcs(t_new)
+        self.constraints.update(t_new)
         if self.segregated:
             self.solve_mesh_motion()
         guesses = [self.options.predictor] + (["constant"] if self.options.predictor != "constant" else [])
@@ -645,7 +529,7 @@ class MonolithicFSI:
         `newton` assembles it (boundary values at the step's end, segregated mesh motion solved)."""
         self.set_bdf(dt)
         self.t.value = self.time + dt
-        self._update_bcs(self.time + dt)
+        self.constraints.update(self.time + dt)
         if self.segregated:
             self.solve_mesh_motion()
         fem_petsc.set_bc(self.x.vector, self.bcs)
@@ -677,7 +561,7 @@ class MonolithicFSI:
         for const in self.bdf:
             const.value = 0.0
         self.t.value = self.time
-        self._update_bcs(self.time)
+        self.constraints.update(self.time)
         if self.segregated:
             self.solve_mesh_motion()
         its, history = self.newton()
