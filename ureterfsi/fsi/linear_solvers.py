@@ -29,6 +29,15 @@ DIRECT = ("mumps", "superlu_dist", "superlu", "umfpack")
 MUMPS_WORKSPACE_PERCENT = 20                # MUMPS's own default ICNTL(14)
 
 
+def forget_options(prefix: str) -> None:
+    """Delete every PETSc option under `prefix` (once the solvers that read them are gone)."""
+    if PETSc.Sys.isFinalized():
+        return
+    opts = PETSc.Options()
+    for key in [k for k in opts.getAll() if k.startswith(prefix)]:
+        opts.delValue(key)
+
+
 def direct_package(linear_solver: str) -> str:
     """The LU package of a sub-problem (a mesh-motion or stent solve) under `linear_solver`: the package
     itself, or MUMPS under a Krylov strategy."""

@@ -5,6 +5,11 @@ from dataclasses import dataclass
 
 from .linear_solvers import MUMPS_WORKSPACE_PERCENT
 
+# the values of the options that name a choice
+CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
+           "solid_block": ("condensed", "whole"), "coupling_scheme": ("monolithic", "partitioned"),
+           "krylov_forcing": ("fixed", "eisenstat_walker"), "jacobian_sparsity": ("couplings", "mixed_element")}
+
 
 @dataclass
 class SolverOptions:
@@ -72,3 +77,11 @@ class SolverOptions:
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
+
+    def check_choices(self) -> None:
+        """ValueError naming the first option of CHOICES whose value is none of its choices."""
+        for key, allowed in CHOICES.items():
+            value = getattr(self, key)
+            if value not in allowed:
+                names = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
+                raise ValueError(f"{key} {names}, got {value!r}")

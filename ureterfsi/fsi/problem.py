@@ -8,9 +8,12 @@ fluid-solid interface follow from the conforming continuous v and u (paper eqs. 
 
 Rows that belong to no physics are pinned: pressure dofs owned only by solid cells, solid-pressure
 dofs outside the Mooney-Rivlin cells. The mesh-motion rows of interface displacement dofs are removed,
-so the interface moves exactly with the solid kinematics (no mesh-motion pollution).
+so the interface moves exactly with the solid kinematics (no mesh-motion pollution): fsi.constraints.
 Time: BDF2 with variable step (Backward Euler for the first step); steady mode switches d/dt off.
-Newton's method and its convergence tests: fsi.newton; the ALE Jacobian guard: fsi.ale_jacobian.
+Elsewhere: the options (fsi.options), the residual's terms (fsi.forms, fsi.physics), the dofs per field and split
+(fsi.dofs), Newton's method and its convergence tests (fsi.newton), the linear solvers (fsi.linear_solvers), the
+partitioned sweeps (fsi.partitioned), the segregated mesh motion (fsi.mesh_motion), the matrices' sparsity
+(fsi.sparsity) and the ALE Jacobian guard (fsi.ale_jacobian).
 """
 from __future__ import annotations
 
@@ -25,7 +28,6 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
-from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import forms, physics, sparsity
@@ -33,9 +35,9 @@ from .ale_jacobian import ALEJacobian
 from .constraints import Constraints
 from .dofs import DofLayout
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
-                             direct_package)
+                             forget_options)
 from .materials import MooneyRivlin
-from .mesh_motion import Extension, PrescribedMap
+from .mesh_motion import cell_stiffness, segregated_motion
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
 from .options import SolverOptions
@@ -45,19 +47,14 @@ from .scene import Scene
 log = logging.getLogger("ureterfsi.fsi")
 
 
-def forget_options(prefix: str) -> None:
-    """Delete every PETSc option under `prefix` (once the solvers that read them are gone)."""
-    if PETSc.Sys.isFinalized():
-        return
-    opts = PETSc.Options()
-    for key in [k for k in opts.getAll() if k.startswith(prefix)]:
-        opts.delValue(key)
-
-
 class MonolithicFSI:
+    """The problem of a `scene` solved with `options`: its mixed space, state and BDF history, forms, constraints
+    and solver strategies; `step(dt)` advances it, `solve_steady()` poses a steady state."""
+
     def __init__(self, scene: Scene, options: SolverOptions | None = None):
         self.scene = scene
         self.options = opts = options or SolverOptions()
+        opts.check_choices()
         mesh = scene.mesh
         self.mesh = mesh
         self.comm = mesh.comm
@@ -69,10 +66,6 @@ class MonolithicFSI:
         solid_tags = tuple(t for s in scene.solids for t in s.tags)
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
         self.segregated = opts.mesh_motion_coupling == "segregated"
-        if opts.mesh_motion_coupling not in ("monolithic", "segregated"):
-            raise ValueError(f"mesh_motion_coupling 'monolithic' or 'segregated', got {opts.mesh_motion_coupling!r}")
-        if opts.predictor not in ("quadratic", "linear", "constant"):
-            raise ValueError(f"predictor 'quadratic', 'linear' or 'constant', got {opts.predictor!r}")
         if self.segregated and (solid_tags or not fluid_tags):
             raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
         if scene.mesh_motion is not None and not self.segregated:
@@ -143,7 +136,7 @@ class MonolithicFSI:
 
         self.mesh_form = self.mesh_jacobian_form = None
         if fluid_tags:
-            self.stiffness = self._cell_stiffness(fluid_tags)
+            self.stiffness = cell_stiffness(mesh, self.cells(fluid_tags), opts.mesh_stiffening)
         if fluid_tags and not self.segregated:
             Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags))
             self.mesh_form = fem.form(Rm)
@@ -168,14 +161,6 @@ class MonolithicFSI:
             self._setup_mesh_motion(dx(fluid_tags))
 
         # --- algebra ------------------------------------------------------------------------
-        if opts.solid_block not in ("condensed", "whole"):
-            raise ValueError(f"solid_block 'condensed' or 'whole', got {opts.solid_block!r}")
-        if opts.coupling_scheme not in ("monolithic", "partitioned"):
-            raise ValueError(f"coupling_scheme 'monolithic' or 'partitioned', got {opts.coupling_scheme!r}")
-        if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
-            raise ValueError(f"krylov_forcing 'fixed' or 'eisenstat_walker', got {opts.krylov_forcing!r}")
-        if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
-            raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
         own = opts.jacobian_sparsity == "couplings"
         solids = self.solid_regions()
         self._A = None
@@ -246,24 +231,6 @@ class MonolithicFSI:
         ct = self.scene.cell_tags
         return np.unique(np.concatenate([ct.find(t) for t in tags] or [np.zeros(0, np.int32)])).astype(np.int32)
 
-    def _cell_stiffness(self, fluid_tags):
-        """k = (V_mean / V_cell)^q on fluid cells: small cells near interfaces resist distortion."""
-        Q = fem.FunctionSpace(self.mesh, ("DG", 0))
-        vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=self.mesh)))
-        vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        k = fem.Function(Q, name="mesh_stiffness")
-        cells = self.cells(fluid_tags)
-        cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
-        dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
-        local = vol.array[dofs]
-        total = self.comm.allreduce(local.sum(), MPI.SUM)
-        count = self.comm.allreduce(local.size, MPI.SUM)
-        vmean = total / max(count, 1)
-        k.x.array[:] = 1.0
-        k.x.array[dofs] = (vmean / local) ** self.options.mesh_stiffening
-        k.x.scatter_forward()
-        return k
-
     def _linear_solver(self, prefix) -> LinearSolver:
         """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block
         (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
@@ -297,23 +264,9 @@ class MonolithicFSI:
         return self.linear_solver.factor_matrix()
 
     def _setup_mesh_motion(self, dx_fluid):
-        """Segregated mesh motion: the scene's prescribed ALE map, or the linear extension problem (LU, or CG
-        above SolverOptions.mesh_motion_direct_max_unknowns)."""
-        d = self.mesh_displacement
-        if self.scene.mesh_motion is not None:
-            self.mesh_motion = PrescribedMap(d, self.constraints.mesh, self.scene.mesh_motion, self.comm)
-            return
-        V, o = self.mesh_space, self.options
-        a = physics.mesh_motion_residual(self.ops, o.mesh_motion, ufl.TrialFunction(V), ufl.TestFunction(V),
-                                         self.stiffness, dx_fluid)
-        L = ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())), ufl.TestFunction(V)) * dx_fluid
-        limit = o.mesh_motion_direct_max_unknowns
-        unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-        self.mesh_motion = Extension(d, self.constraints.mesh, a, L, self.comm,
-                                     iterative=limit is not None and unknowns > limit,
-                                     package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
-                                     prefix=f"{self.options_prefix}mesh_", counters=self.counters,
-                                     workspace_percent=o.mumps_workspace_percent)
+        self.mesh_motion = segregated_motion(self.mesh_displacement, self.constraints.mesh, self.scene.mesh_motion,
+                                             self.ops, self.stiffness, dx_fluid, self.options,
+                                             f"{self.options_prefix}mesh_", self.counters)
 
     def use_mesh_motion(self, prescribed) -> None:
         """Swap the segregated mesh motion before a run: a prescribed ALE map (as Scene.mesh_motion) or None (the
