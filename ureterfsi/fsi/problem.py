@@ -158,7 +158,7 @@ class MonolithicFSI:
                                        (self.mesh_displacement, self._mesh_dofs) if self.segregated else None)
         self.bcs = self.constraints.bcs
         if self.segregated:
-            self._setup_mesh_motion(dx(fluid_tags))
+            self._setup_mesh_motion()
 
         # --- algebra ------------------------------------------------------------------------
         own = opts.jacobian_sparsity == "couplings"
@@ -263,9 +263,10 @@ class MonolithicFSI:
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
         return self.linear_solver.factor_matrix()
 
-    def _setup_mesh_motion(self, dx_fluid):
+    def _setup_mesh_motion(self):
+        """The segregated mesh motion of the scene (mesh_motion.segregated_motion)."""
         self.mesh_motion = segregated_motion(self.mesh_displacement, self.constraints.mesh, self.scene.mesh_motion,
-                                             self.ops, self.stiffness, dx_fluid, self.options,
+                                             self.ops, self.stiffness, self.dx(self.fluid_tags), self.options,
                                              f"{self.options_prefix}mesh_", self.counters)
 
     def use_mesh_motion(self, prescribed) -> None:
@@ -274,7 +275,7 @@ class MonolithicFSI:
         if not self.segregated:
             raise ValueError("use_mesh_motion swaps the segregated mesh motion (mesh_motion_coupling 'segregated')")
         self.scene = replace(self.scene, mesh_motion=prescribed)
-        self._setup_mesh_motion(self.dx(self.fluid_tags))
+        self._setup_mesh_motion()
 
     @property
     def mesh_motion_solver(self) -> str:
