@@ -13,6 +13,7 @@ CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("
 
 @dataclass
 class SolverOptions:
+    """The options of a MonolithicFSI (the study sets them from its configuration: study.options.solver_options)."""
     velocity_degree: int = 2
     pressure_degree: int = 1
     quadrature_degree: int = 4
