@@ -92,8 +92,8 @@ def main():
           "| difference from lu_flow |")
     print("|---|---|---|---|---|---|---|")
     reference = None
-    flow_is = pb.field_is({"mirror": ["displacement"], "flow": ["velocity", "pressure"]})
-    schur_is = pb.field_is({"momentum": ["velocity", "displacement"], "pressure": ["pressure"]})
+    flow_is = pb.layout.field_is({"mirror": ["displacement"], "flow": ["velocity", "pressure"]})
+    schur_is = pb.layout.field_is({"momentum": ["velocity", "displacement"], "pressure": ["pressure"]})
     for name in args.variants:
         prefix = f"bench_{name}_"
         opts = VARIANTS[name] if name.startswith("lu") else schur_fieldsplit_options(

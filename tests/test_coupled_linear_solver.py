@@ -104,7 +104,7 @@ def _owned(pb, local):
 
 def test_splits_are_the_scene_regions(lu_run):
     pb = lu_run[0]
-    s = pb.coupled_splits()
+    s = pb.layout.coupled_splits(pb.cells(pb.solid_tags), pb.constraints.pins, pb.constraints.dirichlet)
     nloc = pb.W.dofmap.index_map.size_local * pb.W.dofmap.index_map_bs
     allof = np.concatenate(list(s.values()))
     assert allof.size == nloc and np.array_equal(np.sort(allof), np.arange(nloc)), "a partition of the dofs"
@@ -133,7 +133,7 @@ def test_a_wrong_split_does_not_converge(lu_run):
     """On the last Jacobian of the LU run, the interface velocity moved from S to F: GMRES stalls (the right split: a few iterations, the LU's
     solution)."""
     pb = lu_run[0]
-    s = pb.coupled_splits()
+    s = pb.layout.coupled_splits(pb.cells(pb.solid_tags), pb.constraints.pins, pb.constraints.dirichlet)
     tdim, ct = pb.mesh.topology.dim, pb.scene.cell_tags
     V = pb.W.sub(pb.index["velocity"])
     interface = np.intersect1d(_owned(pb, fem.locate_dofs_topological(V, tdim, ct.find(FLUID))),

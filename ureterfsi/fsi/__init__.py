@@ -4,7 +4,8 @@ from .integrator import Observer, SolveFailure, StepRecord, TimeIntegrator, Time
 from .linear_solvers import BlockGaussSeidel
 from .materials import LinearElastic, MooneyRivlin, NewtonianFluid
 from .newton import NewtonDivergence
-from .problem import MonolithicFSI, SolverOptions
+from .options import SolverOptions
+from .problem import MonolithicFSI
 from .scene import (BodyForce, DirichletCondition, FluidRegion, FollowerPressure, OpenBoundary, Scene, SolidRegion,
                     SurfaceLoad)
 

@@ -12,7 +12,7 @@ an LU factorisation (MUMPS, METIS ordering) of each diagonal block:
 
 S the solid split (velocity and displacement dofs of solid cells, interface included; the solid pressure; the
 pinned fluid pressures; the Dirichlet rows of the fluid displacement), M the free fluid mesh displacement,
-F the fluid-only velocity and pressure (`MonolithicFSI.coupled_splits`). The upper blocks (fluid traction
+F the fluid-only velocity and pressure (`dofs.DofLayout.coupled_splits`). The upper blocks (fluid traction
 on the solid, A_SF, A_SM; the flow's shape derivatives on the mesh, A_MF = 0) are left to GMRES. The
 Krylov iteration runs on the current Jacobian, so a kept (older) block factor changes the iteration count,
 never the Newton iterate beyond the Krylov tolerance.
@@ -27,6 +27,15 @@ SPLITS = ("solid", "mesh", "flow")
 KRYLOV = ("block_gauss_seidel",)            # linear_solver values handled here
 DIRECT = ("mumps", "superlu_dist", "superlu", "umfpack")
 MUMPS_WORKSPACE_PERCENT = 20                # MUMPS's own default ICNTL(14)
+
+
+def forget_options(prefix: str) -> None:
+    """Delete every PETSc option under `prefix` (once the solvers that read them are gone)."""
+    if PETSc.Sys.isFinalized():
+        return
+    opts = PETSc.Options()
+    for key in [k for k in opts.getAll() if k.startswith(prefix)]:
+        opts.delValue(key)
 
 
 def direct_package(linear_solver: str) -> str:

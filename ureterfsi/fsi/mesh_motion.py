@@ -1,16 +1,38 @@
 """Mesh-motion strategies of a fluid-alone scene (SolverOptions.mesh_motion_coupling: segregated): the ALE
-displacement of the fluid mesh at the new time, found before the flow's Newton step (MonolithicFSI)."""
+displacement of the fluid mesh at the new time, found before the flow's Newton step (MonolithicFSI); and the
+cell stiffness of every mesh-motion problem."""
 from __future__ import annotations
 
 import numpy as np
+import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .linear_solvers import MUMPS_WORKSPACE_PERCENT, mumps_options
+from . import physics
+from .linear_solvers import MUMPS_WORKSPACE_PERCENT, direct_package, mumps_options
 
 MISMATCH_LIMIT = 0.05       # PrescribedMap: largest disagreement with the boundary motion, of the displacement
+
+
+def cell_stiffness(mesh, cells: np.ndarray, exponent: float) -> fem.Function:
+    """DG0 k = (V_mean / V_cell)^exponent on the local `cells` (mean over them), 1 elsewhere: small cells near
+    interfaces resist distortion."""
+    Q = fem.FunctionSpace(mesh, ("DG", 0))
+    vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=mesh)))
+    vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    k = fem.Function(Q, name="mesh_stiffness")
+    cells = cells[cells < mesh.topology.index_map(mesh.topology.dim).size_local]
+    dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
+    local = vol.array[dofs]
+    total = mesh.comm.allreduce(local.sum(), MPI.SUM)
+    count = mesh.comm.allreduce(local.size, MPI.SUM)
+    vmean = total / max(count, 1)
+    k.x.array[:] = 1.0
+    k.x.array[dofs] = (vmean / local) ** exponent
+    k.x.scatter_forward()
+    return k
 
 
 class PrescribedMap:
@@ -90,3 +112,22 @@ class Extension:
             raise RuntimeError(f"mesh-motion solve failed: PETSc KSP reason {self.ksp.getConvergedReason()} "
                                f"after {self.ksp.getIterationNumber()} CG iterations")
         self.displacement.x.scatter_forward()
+
+
+def segregated_motion(displacement: fem.Function, bcs: list, prescribed, ops, stiffness, dx_fluid, options,
+                      prefix: str, counters: dict):
+    """The segregated mesh motion into `displacement` with the Dirichlet conditions `bcs`: the `prescribed` ALE map
+    (Scene.mesh_motion), or (None) the extension problem of SolverOptions.mesh_motion with the cell `stiffness`
+    over `dx_fluid` (LU, or CG above `options.mesh_motion_direct_max_unknowns`)."""
+    V = displacement.function_space
+    comm = V.mesh.comm
+    if prescribed is not None:
+        return PrescribedMap(displacement, bcs, prescribed, comm)
+    a = physics.mesh_motion_residual(ops, options.mesh_motion, ufl.TrialFunction(V), ufl.TestFunction(V),
+                                     stiffness, dx_fluid)
+    L = ufl.inner(fem.Constant(V.mesh, np.zeros(V.ufl_element().value_shape())), ufl.TestFunction(V)) * dx_fluid
+    limit = options.mesh_motion_direct_max_unknowns
+    unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    return Extension(displacement, bcs, a, L, comm, iterative=limit is not None and unknowns > limit,
+                     package=direct_package(options.linear_solver), rtol=options.mesh_motion_rtol, prefix=prefix,
+                     counters=counters, workspace_percent=options.mumps_workspace_percent)

@@ -1,7 +1,7 @@
 """Partitioned solution of the monolithic FSI residual (SolverOptions.coupling_scheme "partitioned").
 
 The same discrete problem as Newton on the whole system, R(x) = 0, solved by nonlinear block Gauss-Seidel sweeps
-over the splits of MonolithicFSI.coupled_splits (S solid with the interface velocity, M free fluid mesh
+over the splits of dofs.DofLayout.coupled_splits (S solid with the interface velocity, M free fluid mesh
 displacement, F fluid velocity and pressure):
 
     x_S <- x_S - A_SS^-1 R_S(x)      repeated (modified Newton on the solid rows; mesh and flow held),
@@ -101,7 +101,7 @@ class PartitionedCoupling:
             sizes = {n: pb.comm.allreduce(len(splits[n])) for n in ORDER}
             raise ValueError(f"coupling_scheme 'partitioned' needs non-empty splits {ORDER} (a scene with a fluid and "
                              f"a solid region), got sizes {sizes}")
-        self.index = pb._split_is(splits)
+        self.index = pb.layout.split_is(splits)
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
         self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
@@ -114,13 +114,12 @@ class PartitionedCoupling:
             mass_form, mass = wall.mass
             fem_petsc.assemble_matrix(mass, mass_form)
             mass.assemble()
-            offset = pb.W.dofmap.index_map.local_range[0] * pb.W.dofmap.index_map_bs
             self.factors["solid"] = CondensedSolidFactor(pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"],
-                                                         offset, v_pos, u_pos, mass)
+                                                         pb.layout.offset, v_pos, u_pos, mass)
             mass.destroy()
         # {split: {field: positions in the split's local array}} for the per-field increments of a block
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
-                              for f, d in pb._field_owned.items()} for n in ORDER}
+                              for f, d in pb.layout.field_owned.items()} for n in ORDER}
         # the rows a block's iteration needs, assembled alone: the urine's and (condensed) the wall's from their
         # forms, the mesh's from the (linear) mesh-motion form; else the wall's from the whole residual
         self._row_vectors = {"flow": pb.b.duplicate(), "mesh": pb.bm.duplicate()}
@@ -181,7 +180,7 @@ class PartitionedCoupling:
     def _scales(self) -> dict:
         """{field: ||x_f||_inf} of the current state, reduced over the ranks."""
         x = self.pb.x.x.array
-        return {f: s for f, (s, _) in measure_field_increments(x, x, self.pb._field_owned, self.pb.comm).items()}
+        return {f: s for f, (s, _) in measure_field_increments(x, x, self.pb.layout.field_owned, self.pb.comm).items()}
 
     def block_residual(self, name: str) -> PETSc.Vec:
         """A vector whose entries on split `name` are the residual's at the current state."""
@@ -249,7 +248,7 @@ class PartitionedCoupling:
         least = o.newton_increment_floor / (o.newton_field_rtol or o.newton_stol)
         w = np.zeros(pb.x.vector.getLocalSize())
         for f, s in self._scales().items():
-            w[pb._field_owned[f]] = 1.0 / max(s, least)
+            w[pb.layout.field_owned[f]] = 1.0 / max(s, least)
         return w
 
     def _anderson(self, xs: list, gs: list, w: np.ndarray) -> np.ndarray:
@@ -318,7 +317,8 @@ class PartitionedCoupling:
         return pb._assemble_residual() if corrected else pb.b.norm()
 
     def _fields_off(self, rtol: float | None) -> dict:
-        return fields_off(self.field_increments, self.pb._field_owned, rtol, self.pb.options.newton_increment_floor)
+        pb = self.pb
+        return fields_off(self.field_increments, pb.layout.field_owned, rtol, pb.options.newton_increment_floor)
 
     def error_bound(self, xs: list, gs: list) -> float:
         """Bound of the distance of G(x_k) = gs[-1] from the step's solution in the max norm relative to each field
@@ -393,7 +393,7 @@ class PartitionedCoupling:
             xs.append(before)
             gs.append(pb.x.x.array[:n].copy())
             del xs[:-(max(o.anderson_depth, 1) + 1)], gs[:-(max(o.anderson_depth, 1) + 1)]
-            self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb._field_owned, pb.comm)
+            self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb.layout.field_owned, pb.comm)
             done, assembled = self._converged(xs, gs, r0, history)
             if done:
                 if o.sweep_convergence == "contraction":
@@ -451,7 +451,7 @@ def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
     flow = BlockForms(fem.form(R_flow), flow_jacobian,
                       sparsity.coupled_matrix(pb.W, pb.field_names, pb.cells(pb.fluid_tags), [], part="flow")
                       if own else fem_petsc.create_matrix(flow_jacobian))
-    splits = pb.coupled_splits()
+    splits = pb.layout.coupled_splits(pb.cells(pb.solid_tags), pb.constraints.pins, pb.constraints.dirichlet)
     wall = None
     if pb.options.solid_block == "condensed":
         urine_cells = cells_touching(pb, pb.cells(pb.fluid_tags), splits["solid"])

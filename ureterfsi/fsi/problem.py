@@ -8,9 +8,12 @@ fluid-solid interface follow from the conforming continuous v and u (paper eqs. 
 
 Rows that belong to no physics are pinned: pressure dofs owned only by solid cells, solid-pressure
 dofs outside the Mooney-Rivlin cells. The mesh-motion rows of interface displacement dofs are removed,
-so the interface moves exactly with the solid kinematics (no mesh-motion pollution).
+so the interface moves exactly with the solid kinematics (no mesh-motion pollution): fsi.constraints.
 Time: BDF2 with variable step (Backward Euler for the first step); steady mode switches d/dt off.
-Newton's method and its convergence tests: fsi.newton; the ALE Jacobian guard: fsi.ale_jacobian.
+Elsewhere: the options (fsi.options), the residual's terms (fsi.forms, fsi.physics), the dofs per field and split
+(fsi.dofs), Newton's method and its convergence tests (fsi.newton), the linear solvers (fsi.linear_solvers), the
+partitioned sweeps (fsi.partitioned), the segregated mesh motion (fsi.mesh_motion), the matrices' sparsity
+(fsi.sparsity) and the ALE Jacobian guard (fsi.ale_jacobian).
 """
 from __future__ import annotations
 
@@ -19,135 +22,39 @@ import logging
 import math
 import time as _time
 import weakref
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
-from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import forms, physics, sparsity
 from .ale_jacobian import ALEJacobian
-from .linear_solvers import (KRYLOV, MUMPS_WORKSPACE_PERCENT, BlockGaussSeidel, FlowBlockLU, LinearSolver,
-                             SchurFieldsplit, WholeSystemLU, direct_package)
-from .materials import LinearElastic, MooneyRivlin
-from .mesh_motion import Extension, PrescribedMap
+from .constraints import Constraints
+from .dofs import DofLayout
+from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
+                             forget_options)
+from .materials import MooneyRivlin
+from .mesh_motion import cell_stiffness, segregated_motion
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
+from .options import SolverOptions
 from .partitioned import PartitionedCoupling, partitioned_coupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
 
-FIELDS = ("velocity", "displacement", "pressure", "solid_pressure")
-
-
-@dataclass
-class SolverOptions:
-    velocity_degree: int = 2
-    pressure_degree: int = 1
-    quadrature_degree: int = 4
-    mesh_motion: str = "harmonic"       # harmonic | elastic
-    mesh_stiffening: float = 1.0        # exponent q of (V_mean / V_cell)^q
-    newton_rtol: float = 1e-8           # residual reduction relative to the step's first residual
-    newton_atol: float = 1e-10          # absolute residual norm
-    # stagnation exit: every field's Newton increment below this fraction of the field's max norm
-    newton_stol: float = 1e-11
-    # converged also needs every field's last increment <= this fraction of its max norm (None: residual alone):
-    # one residual norm mixes rows of different scales, where a solid's stiff rows can hide an unconverged fluid
-    newton_field_rtol: float | None = None
-    # SI units: a field increment below it counts as converged (a field at rest holds round-off, no scale of its own)
-    newton_increment_floor: float = 1e-10
-    newton_max_iterations: int = 15
-    # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
-    # "constant" previous state
-    predictor: str = "linear"
-    reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
-    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
-    # a direct package (mumps, superlu_dist, superlu, umfpack: LU of the Newton system) or "fieldsplit": Krylov
-    # with a Schur-complement block preconditioner (fluid-alone scenes with segregated mesh motion only, see
-    # linear_solvers.SchurFieldsplit), whose memory grows ~linearly with the mesh
-    # or "block_gauss_seidel": GMRES with a solid -> mesh -> flow block Gauss-Seidel preconditioner, MUMPS LU on
-    # each block (coupled FSI scenes, monolithic mesh motion; ureterfsi.fsi.linear_solvers)
-    linear_solver: str = "mumps"
-    # MUMPS ICNTL(14): workspace margin over MUMPS's estimate, per cent, of every MUMPS factorisation the
-    # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
-    mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
-    # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
-    # ICC(0) instead of LU, whose factor is as large as the flow block's; None: always LU
-    mesh_motion_direct_max_unknowns: int | None = None
-    # CG + ICC(0) mesh motion: residual reduction relative to the preconditioned right-hand side ||B b||, i.e.
-    # to the whole displacement, not to its change in a step: small enough that the mesh velocity's error
-    # rtol |d| / dt stays far below the flow's velocities
-    mesh_motion_rtol: float = 1e-9
-    krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
-    krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
-    # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
-    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (newton.Newton._forcing)
-    krylov_forcing: str = "fixed"
-    # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
-    # mesh blocks at the next fresh Jacobian
-    krylov_refactorise_iterations: int = 10
-    # "monolithic": mesh-motion rows solved with the physics (needed whenever a solid moves the fluid
-    # boundary); "segregated": fluid-alone scenes whose boundary motion is prescribed - the mesh motion
-    # is a linear problem of its own (factorised once) solved before each step, and the Newton system
-    # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
-    mesh_motion_coupling: str = "monolithic"
-    # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
-    # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
-    coupling_scheme: str = "monolithic"
-    block_iterations: int = 3           # partitioned: updates of the solid and flow blocks per sweep, at most
-    anderson_depth: int = 5             # partitioned: sweeps mixed by Anderson acceleration (0: plain sweeps)
-    anderson_reuse: int = 0             # partitioned: the mixing keeps anderson_depth x this of earlier steps' sweeps
-    # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
-    # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
-    block_reuse_contraction: float = 0.5
-    # partitioned: a step has converged when the bound rho / (1 - rho) ||G(x) - x|| of the sweeps' contraction says
-    # every field is within newton_field_rtol of the step's solution ("contraction"), or when Newton's residual test
-    # holds and the last sweep changed no field by more than newton_field_rtol ("residual")
-    sweep_convergence: str = "contraction"
-    # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
-    # fsi.condensation) or "whole" (the block as it stands)
-    solid_block: str = "condensed"
-    # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
-    # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
-    jacobian_sparsity: str = "couplings"
-
-
-def dirichlet_bcs(cond, base, facet_tags) -> list:
-    """[(DirichletBC, value function, component)] of a DirichletCondition on the space `base` (a space or a
-    subspace of a mixed space): the whole vector, or each listed component; values start at zero."""
-    fdim = base.mesh.topology.dim - 1
-    facets = np.unique(np.concatenate([facet_tags.find(t) for t in cond.tags])).astype(np.int32)
-    out = []
-    for c in [None] if cond.components is None else list(cond.components):
-        space = base if c is None else base.sub(c)
-        if space.component():      # a subspace: the value lives in its collapsed space
-            collapsed, _ = space.collapse()
-            g = fem.Function(collapsed)
-            bc = fem.dirichletbc(g, fem.locate_dofs_topological((space, collapsed), fdim, facets), space)
-        else:
-            g = fem.Function(space)
-            bc = fem.dirichletbc(g, fem.locate_dofs_topological(space, fdim, facets))
-        out.append((bc, g, c))
-    return out
-
-
-def forget_options(prefix: str) -> None:
-    """Delete every PETSc option under `prefix` (once the solvers that read them are gone)."""
-    if PETSc.Sys.isFinalized():
-        return
-    opts = PETSc.Options()
-    for key in [k for k in opts.getAll() if k.startswith(prefix)]:
-        opts.delValue(key)
-
 
 class MonolithicFSI:
+    """The problem of a `scene` solved with `options`: its mixed space, state and BDF history, forms, constraints
+    and solver strategies; `step(dt)` advances it, `solve_steady()` poses a steady state."""
+
     def __init__(self, scene: Scene, options: SolverOptions | None = None):
         self.scene = scene
         self.options = opts = options or SolverOptions()
+        opts.check_choices()
         mesh = scene.mesh
         self.mesh = mesh
         self.comm = mesh.comm
@@ -159,10 +66,6 @@ class MonolithicFSI:
         solid_tags = tuple(t for s in scene.solids for t in s.tags)
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
         self.segregated = opts.mesh_motion_coupling == "segregated"
-        if opts.mesh_motion_coupling not in ("monolithic", "segregated"):
-            raise ValueError(f"mesh_motion_coupling 'monolithic' or 'segregated', got {opts.mesh_motion_coupling!r}")
-        if opts.predictor not in ("quadratic", "linear", "constant"):
-            raise ValueError(f"predictor 'quadratic', 'linear' or 'constant', got {opts.predictor!r}")
         if self.segregated and (solid_tags or not fluid_tags):
             raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
         if scene.mesh_motion is not None and not self.segregated:
@@ -185,6 +88,7 @@ class MonolithicFSI:
         self.W = W = fem.FunctionSpace(mesh, ufl.MixedElement(list(elements.values())))
         self.index = {name: i for i, name in enumerate(self.field_names)}
         self.unknowns = W.dofmap.index_map.size_global * W.dofmap.index_map_bs
+        self.layout = DofLayout(W, self.field_names)
 
         self.x = fem.Function(W, name="state")
         self.x_n = fem.Function(W)
@@ -232,7 +136,7 @@ class MonolithicFSI:
 
         self.mesh_form = self.mesh_jacobian_form = None
         if fluid_tags:
-            self.stiffness = self._cell_stiffness(fluid_tags)
+            self.stiffness = cell_stiffness(mesh, self.cells(fluid_tags), opts.mesh_stiffening)
         if fluid_tags and not self.segregated:
             Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags))
             self.mesh_form = fem.form(Rm)
@@ -246,23 +150,17 @@ class MonolithicFSI:
         self.counters = {"factorisations": 0, "reused_solves": 0}
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
                         "mesh_motion": 0.0}
-        self._build_dirichlet()
-        self._build_pins_and_interface(fluid_tags, solid_tags, mr_tags)
-        self.bcs = self.dirichlet_bcs + self.pin_bcs
+        others = tuple(t for t in fluid_tags + solid_tags if t not in mr_tags)
+        self.constraints = Constraints(self.layout, scene.dirichlet, scene.facet_tags,
+                                       self.cells(fluid_tags) if fluid_tags else None,
+                                       self.cells(solid_tags) if solid_tags else None,
+                                       self.cells(others) if mr_tags else None,
+                                       (self.mesh_displacement, self._mesh_dofs) if self.segregated else None)
+        self.bcs = self.constraints.bcs
         if self.segregated:
-            self._setup_mesh_motion(dx(fluid_tags))
+            self._setup_mesh_motion()
 
         # --- algebra ------------------------------------------------------------------------
-        if opts.solid_block not in ("condensed", "whole"):
-            raise ValueError(f"solid_block 'condensed' or 'whole', got {opts.solid_block!r}")
-        if opts.sweep_convergence not in ("contraction", "residual"):
-            raise ValueError(f"sweep_convergence 'contraction' or 'residual', got {opts.sweep_convergence!r}")
-        if opts.coupling_scheme not in ("monolithic", "partitioned"):
-            raise ValueError(f"coupling_scheme 'monolithic' or 'partitioned', got {opts.coupling_scheme!r}")
-        if opts.krylov_forcing not in ("fixed", "eisenstat_walker"):
-            raise ValueError(f"krylov_forcing 'fixed' or 'eisenstat_walker', got {opts.krylov_forcing!r}")
-        if opts.jacobian_sparsity not in ("couplings", "mixed_element"):
-            raise ValueError(f"jacobian_sparsity 'couplings' or 'mixed_element', got {opts.jacobian_sparsity!r}")
         own = opts.jacobian_sparsity == "couplings"
         solids = self.solid_regions()
         self._A = None
@@ -275,12 +173,7 @@ class MonolithicFSI:
             self._mesh_jacobian_ready = False
             self.bm = fem_petsc.create_vector(self.mesh_form)
         self.dx_vec = self.x.vector.duplicate()
-        nloc = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
-        self._field_owned = {}          # {field: its owned local dofs}
-        for name in self.field_names:
-            dofs = np.asarray(self.sub(name).collapse()[1])
-            self._field_owned[name] = dofs[dofs < nloc]
-        self.nonlinear_solver = Newton(opts, self.x, self.dx_vec, self._field_owned, self.comm)
+        self.nonlinear_solver = Newton(opts, self.x, self.dx_vec, self.layout.field_owned, self.comm)
         self.ksp = PETSc.KSP().create(self.comm)
         prefix = self.options_prefix
         self.ksp.setOptionsPrefix(prefix)
@@ -313,7 +206,7 @@ class MonolithicFSI:
         return [(self.cells(tuple(s.tags)), isinstance(s.material, MooneyRivlin)) for s in self.scene.solids]
 
     def sub(self, name):
-        return self.W.sub(self.index[name])
+        return self.layout.sub(name)
 
     def split(self, which=None):
         """UFL parts {field name: expression} of the current state (or of `which`, e.g. x_dot)."""
@@ -338,140 +231,23 @@ class MonolithicFSI:
         ct = self.scene.cell_tags
         return np.unique(np.concatenate([ct.find(t) for t in tags] or [np.zeros(0, np.int32)])).astype(np.int32)
 
-    def _cell_stiffness(self, fluid_tags):
-        """k = (V_mean / V_cell)^q on fluid cells: small cells near interfaces resist distortion."""
-        Q = fem.FunctionSpace(self.mesh, ("DG", 0))
-        vol = fem_petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx(domain=self.mesh)))
-        vol.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        k = fem.Function(Q, name="mesh_stiffness")
-        cells = self.cells(fluid_tags)
-        cells = cells[cells < self.mesh.topology.index_map(self.mesh.topology.dim).size_local]
-        dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
-        local = vol.array[dofs]
-        total = self.comm.allreduce(local.sum(), MPI.SUM)
-        count = self.comm.allreduce(local.size, MPI.SUM)
-        vmean = total / max(count, 1)
-        k.x.array[:] = 1.0
-        k.x.array[dofs] = (vmean / local) ** self.options.mesh_stiffening
-        k.x.scatter_forward()
-        return k
-
-    def _build_dirichlet(self):
-        """Scene Dirichlet conditions; time-dependent values are re-interpolated in `_update_bcs`.
-        In segregated mode the displacement conditions constrain the mesh-motion problem instead, and
-        every displacement dof of the Newton system mirrors the mesh displacement."""
-        self.dirichlet_bcs, self.mesh_bcs, self._bc_updates = [], [], []
-        for cond in self.scene.dirichlet:
-            if self.segregated and cond.field == "displacement":
-                self.mesh_bcs += self._conditions(cond, self.mesh_space)
-            else:
-                self.dirichlet_bcs += self._conditions(cond, self.sub(cond.field))
-        if self.segregated:
-            dofs = [np.asarray(self._mesh_dofs, dtype=np.int32), np.arange(len(self._mesh_dofs), dtype=np.int32)]
-            self.dirichlet_bcs.append(fem.dirichletbc(self.mesh_displacement, dofs, self.sub("displacement")))
-
-    def _conditions(self, cond, base):
-        bcs = []
-        for bc, g, comp in dirichlet_bcs(cond, base, self.scene.facet_tags):
-            bcs.append(bc)
-            if cond.value is not None:
-                self._bc_updates.append((g, cond.value, comp))
-        return bcs
-
-    def _update_bcs(self, t):
-        for g, value, comp in self._bc_updates:
-            if comp is None:
-                g.interpolate(lambda x: value(x, t))
-            else:
-                g.interpolate(lambda x: np.asarray(value(x, t)).reshape(-1))
-
-    def _build_pins_and_interface(self, fluid_tags, solid_tags, mr_tags):
-        tdim = self.mesh.topology.dim
-        zero = PETSc.ScalarType(0.0)
-        self.pin_bcs = []
-        fluid_cells, solid_cells = self.cells(fluid_tags), self.cells(solid_tags)
-        if "pressure" in self.index and solid_tags:
-            P = self.sub("pressure")
-            in_fluid = fem.locate_dofs_topological(P, tdim, fluid_cells)
-            in_solid = fem.locate_dofs_topological(P, tdim, solid_cells)
-            pinned = np.setdiff1d(in_solid, in_fluid).astype(np.int32)
-            self.pin_bcs.append(fem.dirichletbc(zero, pinned, P))
-        if "solid_pressure" in self.index:
-            others = self.cells(tuple(t for t in fluid_tags + solid_tags if t not in mr_tags))
-            Q = self.sub("solid_pressure")
-            self.pin_bcs.append(fem.dirichletbc(zero, fem.locate_dofs_topological(Q, tdim, others), Q))
-        # mesh-motion rows removed at interface displacement dofs (and at Dirichlet rows)
-        U = self.sub("displacement")
-        if fluid_tags and solid_tags:
-            interface = np.intersect1d(fem.locate_dofs_topological(U, tdim, fluid_cells),
-                                       fem.locate_dofs_topological(U, tdim, solid_cells))
-        else:
-            interface = np.zeros(0, np.int32)
-        bs = self.W.dofmap.index_map_bs
-        nloc = self.W.dofmap.index_map.size_local * bs
-        rows = np.unique(np.concatenate([interface] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs]))
-        rows = rows[rows < nloc]
-        offset = self.W.dofmap.index_map.local_range[0] * bs
-        self._mesh_excluded_rows = (rows + offset).astype(PETSc.IntType)
-        self._mesh_excluded_local = rows.astype(np.int32)
-
-    def field_is(self, groups: dict) -> list:
-        """[(name, PETSc IS of the owned global dofs of its fields)] for {name: [field names]}."""
-        offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
-        out = []
-        for name, fields in groups.items():
-            dofs = np.sort(np.concatenate([self._field_owned[f] for f in fields])) + offset
-            out.append((name, PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=self.comm)))
-        return out
-
-    def _owned(self, local_dofs) -> np.ndarray:
-        """Sorted owned local dofs marked by `local_dofs` on any process (ghost marks summed to the owner)."""
-        marker = fem.Function(self.W)
-        marker.x.array[np.asarray(local_dofs, dtype=np.int64)] = 1.0
-        vec = marker.vector
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return np.flatnonzero(vec.array_r > 0.0).astype(np.int32)
-
-    def coupled_splits(self) -> dict:
-        """Owned local dofs of the splits of the coupled Newton system (linear_solvers.BlockGaussSeidel):
-        "solid" = velocity and displacement on solid cells (the interface included), the solid pressure, the
-        pinned fluid pressures and the Dirichlet rows of the fluid displacement; "mesh" = the other (free) fluid
-        mesh displacement; "flow" = the fluid-only velocity and the fluid pressure."""
-        tdim = self.mesh.topology.dim
-        solid_cells = self.cells(self.solid_tags)
-        collapsed = {f: np.asarray(self.sub(f).collapse()[1]) for f in self.field_names}
-        parts = [fem.locate_dofs_topological(self.sub(f), tdim, solid_cells) for f in ("velocity", "displacement")]
-        parts += [collapsed["solid_pressure"]] if "solid_pressure" in collapsed else []
-        parts += [bc.dof_indices()[0] for bc in self.pin_bcs]
-        dirichlet = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in self.dirichlet_bcs])
-        parts.append(np.intersect1d(dirichlet, collapsed["displacement"]))
-        solid = self._owned(np.concatenate(parts))
-        mesh = np.setdiff1d(self._owned(collapsed["displacement"]), solid)
-        nloc = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
-        flow = np.setdiff1d(np.arange(nloc, dtype=np.int32), np.union1d(solid, mesh))
-        return {"solid": solid, "mesh": mesh, "flow": flow}
-
-    def _split_is(self, splits: dict) -> dict:
-        """{name: PETSc IS of the global indices} of {name: owned local dofs}."""
-        offset = self.W.dofmap.index_map.local_range[0] * self.W.dofmap.index_map_bs
-        return {name: PETSc.IS().createGeneral((dofs + offset).astype(PETSc.IntType), comm=self.comm)
-                for name, dofs in splits.items()}
-
     def _linear_solver(self, prefix) -> LinearSolver:
         """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block
         (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
         o = self.options
         if o.linear_solver == "fieldsplit":
-            splits = self.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
-                                    "pressure": ["pressure"]})
+            splits = self.layout.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
+                                           "pressure": ["pressure"]})
             return SchurFieldsplit(self.ksp, prefix, splits, o.krylov_rtol, o.krylov_max_iterations, self.counters)
         if o.linear_solver == "block_gauss_seidel":
-            return BlockGaussSeidel(self.ksp, prefix, self._split_is(self.coupled_splits()), o.krylov_rtol,
+            splits = self.layout.coupled_splits(self.cells(self.solid_tags), self.constraints.pins,
+                                                self.constraints.dirichlet)
+            return BlockGaussSeidel(self.ksp, prefix, self.layout.split_is(splits), o.krylov_rtol,
                                     o.krylov_max_iterations, o.krylov_refactorise_iterations, self.counters,
                                     self.timings, workspace_percent=o.mumps_workspace_percent)
         if self.segregated:
-            splits = self.field_is({"mirror": ["displacement"],
-                                    "flow": [f for f in self.field_names if f != "displacement"]})
+            splits = self.layout.field_is({"mirror": ["displacement"],
+                                           "flow": [f for f in self.field_names if f != "displacement"]})
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
 
@@ -487,24 +263,11 @@ class MonolithicFSI:
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
         return self.linear_solver.factor_matrix()
 
-    def _setup_mesh_motion(self, dx_fluid):
-        """Segregated mesh motion: the scene's prescribed ALE map, or the linear extension problem (LU, or CG
-        above SolverOptions.mesh_motion_direct_max_unknowns)."""
-        d = self.mesh_displacement
-        if self.scene.mesh_motion is not None:
-            self.mesh_motion = PrescribedMap(d, self.mesh_bcs, self.scene.mesh_motion, self.comm)
-            return
-        V, o = self.mesh_space, self.options
-        a = physics.mesh_motion_residual(self.ops, o.mesh_motion, ufl.TrialFunction(V), ufl.TestFunction(V),
-                                         self.stiffness, dx_fluid)
-        L = ufl.inner(fem.Constant(self.mesh, np.zeros(V.ufl_element().value_shape())), ufl.TestFunction(V)) * dx_fluid
-        limit = o.mesh_motion_direct_max_unknowns
-        unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-        self.mesh_motion = Extension(d, self.mesh_bcs, a, L, self.comm,
-                                     iterative=limit is not None and unknowns > limit,
-                                     package=direct_package(o.linear_solver), rtol=o.mesh_motion_rtol,
-                                     prefix=f"{self.options_prefix}mesh_", counters=self.counters,
-                                     workspace_percent=o.mumps_workspace_percent)
+    def _setup_mesh_motion(self):
+        """The segregated mesh motion of the scene (mesh_motion.segregated_motion)."""
+        self.mesh_motion = segregated_motion(self.mesh_displacement, self.constraints.mesh, self.scene.mesh_motion,
+                                             self.ops, self.stiffness, self.dx(self.fluid_tags), self.options,
+                                             f"{self.options_prefix}mesh_", self.counters)
 
     def use_mesh_motion(self, prescribed) -> None:
         """Swap the segregated mesh motion before a run: a prescribed ALE map (as Scene.mesh_motion) or None (the
@@ -512,7 +275,7 @@ class MonolithicFSI:
         if not self.segregated:
             raise ValueError("use_mesh_motion swaps the segregated mesh motion (mesh_motion_coupling 'segregated')")
         self.scene = replace(self.scene, mesh_motion=prescribed)
-        self._setup_mesh_motion(self.dx(self.fluid_tags))
+        self._setup_mesh_motion()
 
     @property
     def mesh_motion_solver(self) -> str:
@@ -543,7 +306,7 @@ class MonolithicFSI:
         saved, mismatch = d.x.array.copy(), motion.mismatch
 
         def at(t: float) -> fem.Function:
-            self._update_bcs(t)
+            self.constraints.update(t)
             motion.solve(t, d.x.array.copy())
             return d
 
@@ -552,7 +315,7 @@ class MonolithicFSI:
         finally:
             d.x.array[:] = saved
             motion.mismatch = mismatch
-            self._update_bcs(self.time)
+            self.constraints.update(self.time)
 
     def min_ale_jacobian(self) -> float:
         """Minimum det(I + Grad u) over the fluid mesh (1 when undeformed, <= 0 when inverted)."""
@@ -576,7 +339,7 @@ class MonolithicFSI:
                 loc.set(0.0)
             fem_petsc.assemble_vector(bm, self.mesh_form)
             bm.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            bm.array_w[self._mesh_excluded_local] = 0.0
+            bm.array_w[self.constraints.mesh_rows_local] = 0.0
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.copy(self._b_free)       # the physics residual before constraints: after a converged step, the reaction
         if self.mesh_form is not None:
@@ -604,7 +367,7 @@ class MonolithicFSI:
         if not self._mesh_jacobian_ready:
             fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
             Am.assemble()
-            Am.zeroRows(self._mesh_excluded_rows, diag=0.0)
+            Am.zeroRows(self.constraints.mesh_rows, diag=0.0)
             self._mesh_jacobian_ready = True
         return Am
 
@@ -674,7 +437,7 @@ class MonolithicFSI:
         self.set_bdf(dt)
         t_new = self.time + dt
         self.t.value = t_new
-        self._update_bcs(t_new)
+        self.constraints.update(t_new)
         if self.segregated:
             self.solve_mesh_motion()
         guesses = [self.options.predictor] + (["constant"] if self.options.predictor != "constant" else [])
@@ -720,7 +483,7 @@ class MonolithicFSI:
         `newton` assembles it (boundary values at the step's end, segregated mesh motion solved)."""
         self.set_bdf(dt)
         self.t.value = self.time + dt
-        self._update_bcs(self.time + dt)
+        self.constraints.update(self.time + dt)
         if self.segregated:
             self.solve_mesh_motion()
         fem_petsc.set_bc(self.x.vector, self.bcs)
@@ -752,7 +515,7 @@ class MonolithicFSI:
         for const in self.bdf:
             const.value = 0.0
         self.t.value = self.time
-        self._update_bcs(self.time)
+        self.constraints.update(self.time)
         if self.segregated:
             self.solve_mesh_motion()
         its, history = self.newton()

@@ -40,7 +40,8 @@ from ..fields import oneway_parts
 from ..fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings, physics
 from ..fsi.ale_jacobian import ALEJacobian
 from ..fsi.operators import Operators
-from ..fsi.problem import MonolithicFSI, dirichlet_bcs
+from ..fsi.constraints import dirichlet_bcs
+from ..fsi.problem import MonolithicFSI
 from ..fsi.scene import DirichletCondition
 from ..fsi.submesh import SubDomain, extract
 from ..geometry import StentModel, UreterGeometry

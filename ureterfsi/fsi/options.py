@@ -1,0 +1,93 @@
+"""The engine's solver options (MonolithicFSI): discretisation, Newton, linear solvers, mesh motion, coupling."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .linear_solvers import MUMPS_WORKSPACE_PERCENT
+
+# the values of the options that name a choice
+CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
+           "solid_block": ("condensed", "whole"), "coupling_scheme": ("monolithic", "partitioned"),
+           "sweep_convergence": ("contraction", "residual"), "krylov_forcing": ("fixed", "eisenstat_walker"),
+           "jacobian_sparsity": ("couplings", "mixed_element")}
+
+
+@dataclass
+class SolverOptions:
+    """The options of a MonolithicFSI (the study sets them from its configuration: study.options.solver_options)."""
+    velocity_degree: int = 2
+    pressure_degree: int = 1
+    quadrature_degree: int = 4
+    mesh_motion: str = "harmonic"       # harmonic | elastic
+    mesh_stiffening: float = 1.0        # exponent q of (V_mean / V_cell)^q
+    newton_rtol: float = 1e-8           # residual reduction relative to the step's first residual
+    newton_atol: float = 1e-10          # absolute residual norm
+    # stagnation exit: every field's Newton increment below this fraction of the field's max norm
+    newton_stol: float = 1e-11
+    # converged also needs every field's last increment <= this fraction of its max norm (None: residual alone):
+    # one residual norm mixes rows of different scales, where a solid's stiff rows can hide an unconverged fluid
+    newton_field_rtol: float | None = None
+    # SI units: a field increment below it counts as converged (a field at rest holds round-off, no scale of its own)
+    newton_increment_floor: float = 1e-10
+    newton_max_iterations: int = 15
+    # Newton's initial guess: "quadratic" / "linear" extrapolation of the last three / two steps or the
+    # "constant" previous state
+    predictor: str = "linear"
+    reuse_jacobian: bool = False        # keep the factorisation while Newton contracts fast enough
+    reuse_contraction: float = 0.3      # refactorise when ||R_k|| / ||R_k-1|| exceeds this
+    # a direct package (mumps, superlu_dist, superlu, umfpack: LU of the Newton system) or "fieldsplit": Krylov
+    # with a Schur-complement block preconditioner (fluid-alone scenes with segregated mesh motion only, see
+    # linear_solvers.SchurFieldsplit), whose memory grows ~linearly with the mesh
+    # or "block_gauss_seidel": GMRES with a solid -> mesh -> flow block Gauss-Seidel preconditioner, MUMPS LU on
+    # each block (coupled FSI scenes, monolithic mesh motion; ureterfsi.fsi.linear_solvers)
+    linear_solver: str = "mumps"
+    # MUMPS ICNTL(14): workspace margin over MUMPS's estimate, per cent, of every MUMPS factorisation the
+    # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
+    mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
+    # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
+    # ICC(0) instead of LU, whose factor is as large as the flow block's; None: always LU
+    mesh_motion_direct_max_unknowns: int | None = None
+    # CG + ICC(0) mesh motion: residual reduction relative to the preconditioned right-hand side ||B b||, i.e.
+    # to the whole displacement, not to its change in a step: small enough that the mesh velocity's error
+    # rtol |d| / dt stays far below the flow's velocities
+    mesh_motion_rtol: float = 1e-9
+    krylov_rtol: float = 1e-8           # Krylov solvers: relative residual of each linear solve
+    krylov_max_iterations: int = 400    # Krylov solvers: more is a failed linear solve (Newton step retried)
+    # block_gauss_seidel: "fixed" solves every Newton system to krylov_rtol; "eisenstat_walker" is an inexact
+    # Newton, each solve to eta_k in [krylov_rtol, ETA_MAX] (newton.Newton._forcing)
+    krylov_forcing: str = "fixed"
+    # block_gauss_seidel: a linear solve with more Krylov iterations than this refactorises the kept solid and
+    # mesh blocks at the next fresh Jacobian
+    krylov_refactorise_iterations: int = 10
+    # "monolithic": mesh-motion rows solved with the physics (needed whenever a solid moves the fluid
+    # boundary); "segregated": fluid-alone scenes whose boundary motion is prescribed - the mesh motion
+    # is a linear problem of its own (factorised once) solved before each step, and the Newton system
+    # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
+    mesh_motion_coupling: str = "monolithic"
+    # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
+    # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
+    coupling_scheme: str = "monolithic"
+    block_iterations: int = 3           # partitioned: updates of the solid and flow blocks per sweep, at most
+    anderson_depth: int = 5             # partitioned: sweeps mixed by Anderson acceleration (0: plain sweeps)
+    anderson_reuse: int = 0             # partitioned: the mixing keeps anderson_depth x this of earlier steps' sweeps
+    # partitioned: a block's LU is refreshed when its iteration contracts by less than this (reuse_contraction is
+    # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
+    block_reuse_contraction: float = 0.5
+    # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
+    # fsi.condensation) or "whole" (the block as it stands)
+    solid_block: str = "condensed"
+    # partitioned: a step has converged when the bound rho / (1 - rho) ||G(x) - x|| of the sweeps' contraction says
+    # every field is within newton_field_rtol of the step's solution ("contraction"), or when Newton's residual test
+    # holds and the last sweep changed no field by more than newton_field_rtol ("residual")
+    sweep_convergence: str = "contraction"
+    # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
+    # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
+    jacobian_sparsity: str = "couplings"
+
+    def check_choices(self) -> None:
+        """ValueError naming the first option of CHOICES whose value is none of its choices."""
+        for key, allowed in CHOICES.items():
+            value = getattr(self, key)
+            if value not in allowed:
+                names = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
+                raise ValueError(f"{key} {names}, got {value!r}")
