@@ -15,8 +15,9 @@ next sweep. A step has converged (sweep_convergence "contraction") when the a po
 
 x* = G(x*) the step's solution, G one sweep, rho its contraction (the largest secant ratio
 ||G(x_j) - G(x_j-1)|| / ||x_j - x_j-1|| of this step's sweeps and of the previous step's), is within newton_field_rtol
-in the max norm relative to each field; or ("residual") when the residual test of Newton holds and no field changed
-over the last sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
+in the max norm relative to each field (where rho >= 1, so that only Anderson's mixing converges the sweeps, by the
+residual test below); or ("residual") when the residual test of Newton holds and no field changed over the last
+sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
 and refreshed when its iteration contracts by less than block_reuse_contraction: A_SS from the whole Jacobian, A_MM the
 fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
 directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
@@ -347,7 +348,9 @@ class PartitionedCoupling:
         pb, o = self.pb, self.pb.options
         if o.sweep_convergence == "contraction":
             self.bound = self.error_bound(xs, gs)
-            return self.bound <= (o.newton_field_rtol or o.newton_stol), False
+            if math.isfinite(self.bound):
+                return self.bound <= (o.newton_field_rtol or o.newton_stol), False
+            # no contraction to bound the error with (rho >= 1: Anderson's mixing carries the sweeps): Newton's test
         if self._fields_off(o.newton_field_rtol):
             return False, False
         r = pb._assemble_residual()
@@ -396,10 +399,10 @@ class PartitionedCoupling:
             self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb.layout.field_owned, pb.comm)
             done, assembled = self._converged(xs, gs, r0, history)
             if done:
+                if not assembled:
+                    history.append(pb._assemble_residual())     # the accepted state's: the record, the reaction
                 if o.sweep_convergence == "contraction":
-                    r = pb._assemble_residual()         # the accepted state's: the step record, assemble_reaction
-                    history.append(r)
-                    self._check_accepted(r, sweep + 1, history)
+                    self._check_accepted(history[-1], sweep + 1, history)
                 self.contraction = self.step_contraction
                 self._keep(xs, gs)
                 return sweep + 1, history
