@@ -250,3 +250,22 @@ def test_a_fixed_point_that_breaks_the_kinematic_rows_is_refused(monkeypatch):
     with pytest.raises(NewtonDivergence, match="kinematic rows"):
         tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, sweep_convergence="contraction", steps=8,
                  **TOL)
+
+
+def test_without_a_contraction_the_stop_is_newtons_residual_test():
+    """Sweeps whose secant ratio is >= 1 (only the mixing converges them) give no error bound: the contraction stop
+    then asks Newton's residual test, so a state that is the solution is accepted and one that is not is not."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", newton_field_rtol=1e-6, **TOL))
+    pb.solve_steady()
+    part, n = pb.partitioned, pb.x.vector.getLocalSize()
+    x = pb.x.x.array[:n].copy()
+    step = 1e-3                                              # m, m/s, Pa: far from the state at rest
+    xs, gs = [x - step, x], [x + step, x + 4 * step]        # ||dG|| = 3 ||dx||
+    assert part.error_bound(xs, gs) == np.inf
+    part.field_increments = {f: (0.0, 1.0) for f in pb.field_names}     # the last sweep changed nothing
+    r0 = 1e3 * pb.b.norm()
+    assert part.converged(xs, gs, r0, history=[]) == (True, True)       # the solution: the residual test holds
+    pb.x.x.array[:n] += step
+    pb.x.x.scatter_forward()
+    assert part.converged(xs, gs, r0, history=[]) == (False, True)
+    assert part.error_bound(xs, [x, x]) == 0.0                          # a fixed point: nothing left to bound

@@ -342,7 +342,7 @@ class PartitionedCoupling:
         rho = max(self.step_contraction, self.contraction)
         return rho / (1.0 - rho) * change if rho < 1.0 else math.inf
 
-    def _converged(self, xs: list, gs: list, r0: float, history: list) -> tuple[bool, bool]:
+    def converged(self, xs: list, gs: list, r0: float, history: list) -> tuple[bool, bool]:
         """The step's convergence test (module docstring) after a sweep: (converged, whether problem.b now holds the
         whole residual at the current state); `history` gets the residual it assembles."""
         pb, o = self.pb, self.pb.options
@@ -397,7 +397,7 @@ class PartitionedCoupling:
             gs.append(pb.x.x.array[:n].copy())
             del xs[:-(max(o.anderson_depth, 1) + 1)], gs[:-(max(o.anderson_depth, 1) + 1)]
             self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb.layout.field_owned, pb.comm)
-            done, assembled = self._converged(xs, gs, r0, history)
+            done, assembled = self.converged(xs, gs, r0, history)
             if done:
                 if not assembled:
                     history.append(pb._assemble_residual())     # the accepted state's: the record, the reaction
