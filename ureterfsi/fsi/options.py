@@ -79,7 +79,7 @@ class SolverOptions:
     # partitioned: a step has converged when the bound rho / (1 - rho) ||G(x) - x|| of the sweeps' contraction says
     # every field is within newton_field_rtol of the step's solution ("contraction"), or when Newton's residual test
     # holds and the last sweep changed no field by more than newton_field_rtol ("residual")
-    sweep_convergence: str = "contraction"
+    sweep_convergence: str = "residual"
     # coupled Newton system's matrix: "couplings" stores the (cell region, field pair) couplings its forms have
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
