@@ -201,6 +201,11 @@ def test_the_fully_coupled_rung_reads_its_own_linear_solver():
     coupled, other = solver_options(cfg, fully_coupled=True), solver_options(cfg)
     assert (coupled.linear_solver, other.linear_solver) == ("block_gauss_seidel", "mumps")
     assert coupled.krylov_forcing == "eisenstat_walker"
+    assert coupled.coupled_solution() == "Newton + block_gauss_seidel"
+    cfg["solver"] |= {"fully_coupled_scheme": "partitioned", "sweep_convergence": "contraction"}
+    assert solver_options(cfg, fully_coupled=True).coupled_solution() == (
+        "partitioned sweeps wall -> mesh -> urine of the monolithic residual (condensed wall LU, Anderson depth 5, "
+        "contraction stop)")
 
 
 def test_refusals_and_failure_report():

@@ -84,6 +84,13 @@ class SolverOptions:
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
 
+    def coupled_solution(self) -> str:
+        """How a coupled scene's step is solved, in words (a run's provenance)."""
+        if self.coupling_scheme == "partitioned":
+            return (f"partitioned sweeps wall -> mesh -> urine of the monolithic residual ({self.solid_block} wall LU, "
+                    f"Anderson depth {self.anderson_depth}, {self.sweep_convergence} stop)")
+        return f"Newton + {self.linear_solver}"
+
     def check_choices(self) -> None:
         """ValueError naming the first option of CHOICES whose value is none of its choices."""
         for key, allowed in CHOICES.items():

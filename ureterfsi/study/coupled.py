@@ -22,7 +22,7 @@ def pose(cfg: dict, spec: RunSpec, settings, mesh, cell_tags, facet_tags) -> pip
     stent = obs.stent if obs.has_stent else None
     return pipeline.Posed(
         pb, obs, lambda q: coupled_parts(pb, stent, q, cfg["fluid"]["reference_pressure"]),
-        solver=f"monolithic ALE, P2-P2-P1-P0, BDF2, Newton + {pb.options.linear_solver}")
+        solver=f"monolithic ALE, P2-P2-P1-P0, BDF2, {pb.options.coupled_solution()}")
 
 
 def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = None) -> xr.Dataset:
