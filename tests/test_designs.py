@@ -109,8 +109,14 @@ def test_dry_run_of_a_100_point_study(tmp_path):
     cfg["design_studies"] = {"big": grid(hole_diameter=[float(v) for v in np.linspace(5e-4, 9e-4, 10)],
                                          wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
     counts = _dry(tmp_path, cfg, "design_big")
-    assert counts == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10, "design_dataset": 1,
-                      "design_figures": 1, "design_map": 1, "design_big": 1}, counts
+    # the rung check (default on for the one-way rung): 4 corners on the 10 mm segment (2 hole diameters: 2 meshes;
+    # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.rung_check)
+    assert counts == {"design_solve": 100, "design_mesh": 10 + 2, "design_wall_motion": 10 + 2, "design_dataset": 1,
+                      "design_corner_solve": 2 * 4, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
+    cfg["design_studies"]["big"]["rung_check"] = {"corners": "none"}
+    assert _dry(tmp_path, cfg, "design_big") == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10,
+                                                 "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                                                 "design_big": 1}
 
 
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
@@ -132,6 +138,7 @@ def test_one_stent_change_reruns_only_that_points_mesh_and_solve(tmp_path):
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"oat": grid("one_at_a_time", hole_diameter=[5e-4, 7e-4, 8e-4],
                                          wall_stiffness_scale=[0.5, 1.0])}
+    cfg["design_studies"]["oat"]["rung_check"] = {"corners": "none"}    # the points' chain alone (corners: below)
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     _pretend_done(tmp_path, cfg, "oat")
@@ -254,7 +261,8 @@ def test_strictured_design_point_end_to_end(tmp_path):
 
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {"narrow": {"model": "2", "level": "coarse", "rung": "one_way", "grid": {"parameters": {
-        "stricture_fraction": [0.6], "stricture_length": [0.004], "stricture_position": [0.005]}}}}
+        "stricture_fraction": [0.6], "stricture_length": [0.004], "stricture_position": [0.005]}},
+        "rung_check": {"corners": "none"}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_narrow", timeout=600)))
@@ -307,7 +315,8 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
 
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {f"gap{k}": {"model": "2", "level": "coarse", "rung": "one_way",
-                                         "one_way_mesh_motion": "auto", "grid": {"parameters": {
+                                         "one_way_mesh_motion": "auto", "rung_check": {"corners": "none"},
+                                         "grid": {"parameters": {
         "stricture_fraction": [0.7], "hole_pair_spacing": [s], "stricture_length": [0.004],
         "stricture_position": [0.005]}}} for k, s in ((10, 0.010), (5, 0.005))}
     path = tmp_path / "cfg.yaml"
@@ -490,7 +499,7 @@ def _one_point(tmp_path, name: str, params: dict):
     study dataset)."""
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {name: {"model": "2", "level": "coarse", "rung": "one_way",
-                                    "grid": {"parameters": params}}}
+                                    "grid": {"parameters": params}, "rung_check": {"corners": "none"}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", f"design_{name}", timeout=900)))

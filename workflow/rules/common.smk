@@ -308,3 +308,47 @@ def design_solve_mem_mb(w):
     """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
     st = DESIGNS[w.design_study]
     return solve_mem_mb(st.rung, st.point(w.point).symmetry, st.level)
+
+
+def design_corner_inputs(w):
+    """A corner's mesh, and on the one-way rung its wall motion (the fully coupled solve moves its own wall)."""
+    c = DESIGNS[w.design_study].check.corner(w.corner)
+    out = {"mesh": f"results/designs/meshes/{c.mesh_id}.msh"}
+    if w.corner_rung == "one_way":
+        out["wall"] = f"results/designs/wall_motion/{c.wall_id}.nc"
+    return out
+
+
+def design_corner_study(w):
+    """The configuration entering a corner's solve, with its rung and symmetry (rerun trigger)."""
+    st = DESIGNS[w.design_study]
+    c, cfg = ureter_designs.corner_solve_request(st, w.corner, w.corner_rung)
+    sections = ureter_designs.solve_sections(cfg, st.model)
+    return json.dumps(
+        sections | {"rung": w.corner_rung, "symmetry": c.symmetry}, sort_keys=True
+    )
+
+
+def design_corner_mem_mb(w):
+    """MiB a corner's solve reserves: that of a study solve on its rung, symmetry and level."""
+    st = DESIGNS[w.design_study]
+    return solve_mem_mb(w.corner_rung, st.check.corner(w.corner).symmetry, st.level)
+
+
+def design_corner_runs(w):
+    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.corner_run_paths)."""
+    pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()
+    return [f for pair in pairs for f in pair]
+
+
+def design_rung_check_caption(wildcards, input):
+    """The dataset's rung_check attribute for the figure captions, once the dataset exists (a function of input:
+    Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report)."""
+    import os
+
+    import xarray as xr
+
+    if not os.path.exists(input[0]):
+        return "measured when the study's dataset is made (its attribute rung_check)"
+    with xr.open_dataset(input[0], decode_times=False) as ds:
+        return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
