@@ -159,9 +159,11 @@ def test_two_by_two_grid_end_to_end(tmp_path):
         "parameters": {"hole_diameter": [5e-4, 6e-4], "peak_traction": [4e4, 5e4]}}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=600)))
-    assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_dataset": 1,
-                      "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
+    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=900)))
+    # the rung check: the grid's 4 points are its corners on the segment (this study's own): their one-way runs
+    # serve it, and each gets a fully coupled solve (partitioned) on its mesh
+    assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_corner_solve": 4,
+                      "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
     with xr.open_dataset(tmp_path / "results/designs/mini.nc", decode_times=False) as ds:
         ds.load()
     print("\n2x2 design study:", {q: ds[q].values.round(12).tolist() for q in (
@@ -179,6 +181,22 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     # the wall moves more under the larger load, whatever the hole
     disp = ds["peak_wall_displacement"].values
     assert (disp[:, 1] > disp[:, 0]).all(), disp
+    # the rung error of each corner (here every point) and quantity, against the fully coupled solve of 2 steps
+    err = ds["rung_error"]
+    print("rung errors (corner x quantity):", list(err["quantity"].values), err.values.round(5).tolist(),
+          ds.attrs["rung_check"], "wall times one-way / fully coupled:", ds["corner_rung_wall_time"].values,
+          ds["corner_reference_wall_time"].values)
+    assert err.dims == ("corner", "quantity") and set(err["corner"].values) == set(ds["point_id"].values.ravel())
+    for q in ("peak_outlet_flux", "peak_wall_displacement", "peak_stent_von_mises", "hole_exchange_fraction"):
+        assert np.isfinite(err.sel(quantity=q).values).all() and (err.sel(quantity=q).values < 0.5).all(), q
+    assert ds.attrs["rung_check"].startswith("one_way checked against fully_coupled (partitioned) at 4 corners (all) "
+                                             "of the design space on the study's own segment")
+    assert (ds["in_rung_check_region"].values == 1).all()
+    assert (ds["rung_trusted"].values == ds["corner_within_tolerance"].values.all()).all()
+    for c in err["corner"].values:
+        assert (tmp_path / f"results/designs/mini/rung_check/{c}/fully_coupled.nc").exists()
+        assert not (tmp_path / f"results/designs/mini/rung_check/{c}/one_way.nc").exists()     # the point's run
+        assert (tmp_path / f"results/benchmarks/designs/mini/rung_check/{c}_fully_coupled.tsv").exists()
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
         assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
@@ -195,6 +213,7 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     html = report.read_text(errors="replace")
     assert "mini_map.png" in html and "mini_parameters.png" in html and "snakemake.wildcards" not in html
     assert "Design map of study mini" in html
+    assert ds.attrs["rung_check"].replace("'", "&#x27;") in html or ds.attrs["rung_check"] in html  # caption: measured
     for p in ds["point_id"].values.ravel():
         assert (tmp_path / f"results/logs/designs/mini/{p}.log").stat().st_size > 0
         assert (tmp_path / f"results/benchmarks/designs/mini/{p}.tsv").exists()

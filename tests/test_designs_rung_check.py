@@ -6,6 +6,7 @@ from __future__ import annotations
 import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import copy
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -284,3 +285,46 @@ def test_shipped_studies_are_checked():
         st = studies(load_config(deep_merge(base, overlay)))[name]
         assert st.check is not None and st.check.mode == "all", name
         assert len(st.check.reuses) == reuse[name], (name, st.check.reuses)
+
+
+def _pretend_done(work: Path, cfg: dict, name: str) -> None:
+    """Every output of study `name` (points and corners) as an empty file, in job order (then `snakemake --touch`
+    records them as made by their jobs)."""
+    from ureterfsi.designs import design_figure_kinds
+
+    st = studies(load_config(copy.deepcopy(cfg)))[name]
+    every = st.points + st.check.corners
+    runs = [f for pair in corner_run_paths(st).values() for f in pair]
+    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in every for e in ("msh", "json")]
+              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in every],
+              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs, [f"results/designs/{name}.nc"],
+              [f"results/figures/designs/{name}_{k}.{e}" for k in design_figure_kinds(st)
+               for e in cfg["figures"]["formats"]]]
+    for i, stage in enumerate(stages):
+        for f in stage:
+            (work / f).parent.mkdir(parents=True, exist_ok=True)
+            (work / f).touch()
+            os.utime(work / f, (1e9 + i, 1e9 + i))
+
+
+def test_only_a_moved_corner_reruns(tmp_path):
+    """Corners are content-addressed like the points: an interior point's change re-runs that point alone; moving
+    the design space's maximum hole diameter re-runs the two corners there (their mesh, both their solves) besides
+    the moved points."""
+    from test_designs import _dry
+    from test_workflow_e2e import ok, snakemake
+
+    cfg = copy.deepcopy(BASE)
+    cfg["design_studies"] = {"s": grid(hole_diameter=[5e-4, 6e-4, 7e-4], wall_stiffness_scale=[0.5, 1.5])}
+    path = tmp_path / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    _pretend_done(tmp_path, cfg, "s")
+    ok(snakemake(tmp_path, path, "--touch", "--cores", "1", "design_s", profile=None))
+    assert _dry(tmp_path, cfg, "design_s") == {}
+    cfg["design_studies"]["s"]["grid"]["parameters"]["hole_diameter"][1] = 6.5e-4
+    assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1, "design_solve": 2, "design_dataset": 1,
+                                               "design_figures": 1, "design_map": 1, "design_s": 1}
+    cfg["design_studies"]["s"]["grid"]["parameters"]["hole_diameter"][1:] = [6e-4, 8e-4]
+    assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1 + 1, "design_solve": 2, "design_corner_solve": 2 * 2,
+                                               "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                                               "design_s": 1}

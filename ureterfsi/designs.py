@@ -753,6 +753,13 @@ def standardised_regression_coefficients(ds, parameters, quantity: str) -> tuple
     return beta[1:], r2
 
 
+def design_figure_kinds(st: Study) -> list:
+    """The figures of a study: parameters; a map for a full-factorial grid over two or more parameters with two or
+    more values; sensitivity for a sample."""
+    return (["parameters"] + (["map"] if len(map_parameters(st.grid)) >= 2 else [])
+            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else []))
+
+
 def map_parameters(grid: dict) -> list:
     """The parameters of a full-factorial grid {parameter: values} that a map can span (two or more values)."""
     return [p for p, v in grid.items() if len(v) >= 2]

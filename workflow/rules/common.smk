@@ -249,15 +249,9 @@ def stability_inputs(w):
 def design_figures(study):
     """The figure files of a design study: parameters; a map for a full-factorial grid over two or more
     parameters with two or more values; sensitivity for sampled studies."""
-    st = DESIGNS[study]
-    kinds = ["parameters"]
-    if len(ureter_designs.map_parameters(st.grid)) >= 2:
-        kinds.append("map")
-    if st.kind in ("sobol", "latin_hypercube", "saltelli"):
-        kinds.append("sensitivity")
     return [
         f"results/figures/designs/{study}_{k}.{ext}"
-        for k in kinds
+        for k in ureter_designs.design_figure_kinds(DESIGNS[study])
         for ext in FIGURE_FORMATS
     ]
 
@@ -344,11 +338,10 @@ def design_corner_runs(w):
 def design_rung_check_caption(wildcards, input):
     """The dataset's rung_check attribute for the figure captions, once the dataset exists (a function of input:
     Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report)."""
-    import os
-
     import xarray as xr
 
-    if not os.path.exists(input[0]):
+    try:
+        with xr.open_dataset(input[0], decode_times=False) as ds:
+            return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
+    except (OSError, ValueError):   # not made yet (or an empty file of `snakemake --touch`)
         return "measured when the study's dataset is made (its attribute rung_check)"
-    with xr.open_dataset(input[0], decode_times=False) as ds:
-        return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
