@@ -337,11 +337,15 @@ def design_corner_runs(w):
 
 def design_rung_check_caption(wildcards, input):
     """The dataset's rung_check attribute for the figure captions, once the dataset exists (a function of input:
-    Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report)."""
+    Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report).
+    """
     import xarray as xr
 
     try:
         with xr.open_dataset(input[0], decode_times=False) as ds:
             return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
-    except (OSError, ValueError):   # not made yet (or an empty file of `snakemake --touch`)
+    except (
+        OSError,
+        ValueError,
+    ):  # not made yet (or an empty file of `snakemake --touch`)
         return "measured when the study's dataset is made (its attribute rung_check)"

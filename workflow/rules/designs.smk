@@ -168,7 +168,13 @@ if DESIGNS:
             name:
                 f"design_{_study}_rung_check"
             input:
-                [f for pair in ureter_designs.corner_run_paths(DESIGNS[_study]).values() for f in pair],
+                [
+                    f
+                    for pair in ureter_designs.corner_run_paths(
+                        DESIGNS[_study]
+                    ).values()
+                    for f in pair
+                ],
 
     rule designs_all:
         input:
