@@ -99,7 +99,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         for k, f in enumerate(corners[c.id]):
             metadata.write_netcdf(synthetic_run(c.config, "3", end=c.config["time"]["end"], wall_time=1.0 + k), f)
-    return designs.study_dataset(cfg, "s", paths, corners)
+    return designs.study_dataset(cfg, "s", paths, designs.rung_check_dataset(cfg, "s", corners))
 
 
 KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",

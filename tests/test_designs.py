@@ -112,7 +112,7 @@ def test_dry_run_of_a_100_point_study(tmp_path):
     # the rung check (default on for the one-way rung): 4 corners on the 10 mm segment (2 hole diameters: 2 meshes;
     # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.rung_check)
     assert counts == {"design_solve": 100, "design_mesh": 10 + 2, "design_wall_motion": 10 + 2, "design_dataset": 1,
-                      "design_corner_solve": 2 * 4, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
+                      "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
     cfg["design_studies"]["big"]["rung_check"] = {"corners": "none"}
     assert _dry(tmp_path, cfg, "design_big") == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10,
                                                  "design_dataset": 1, "design_figures": 1, "design_map": 1,
@@ -163,7 +163,7 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     # the rung check: the grid's 4 points are its corners on the segment (this study's own): their one-way runs
     # serve it, and each gets a fully coupled solve (partitioned) on its mesh
     assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_corner_solve": 4,
-                      "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
+                      "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
     with xr.open_dataset(tmp_path / "results/designs/mini.nc", decode_times=False) as ds:
         ds.load()
     print("\n2x2 design study:", {q: ds[q].values.round(12).tolist() for q in (

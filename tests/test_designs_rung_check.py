@@ -17,7 +17,7 @@ import yaml
 from ureterfsi import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
-from ureterfsi.designs import QUANTITIES, corner_run_paths, point_id, studies, study_dataset
+from ureterfsi.designs import QUANTITIES, corner_run_paths, point_id, rung_check_dataset, studies, study_dataset
 from ureterfsi.metadata import rung_check_metadata
 
 REPO = Path(__file__).resolve().parent.parent
@@ -182,7 +182,9 @@ def _synthetic(tmp_path: Path, cfg: dict, rung_error):
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         _fake_run(corners[c.id][0], peak, 1e-5, 2.0)
         _fake_run(corners[c.id][1], peak / (1 + rung_error(c.values)), 1e-5, 7.0)
-    return st, study_dataset(cfg, "s", paths, corners)
+    check = rung_check_dataset(cfg, "s", corners)
+    assert check.attrs["rung_check"] in study_dataset(cfg, "s", paths, check).attrs["rung_check"]   # + the points
+    return st, study_dataset(cfg, "s", paths, check)
 
 
 def test_dataset_records_the_rung_error_per_corner(tmp_path):
@@ -263,15 +265,18 @@ def test_dry_run_lists_the_corner_jobs(tmp_path):
     cfg["design_studies"] = {"s": grid(hole_diameter=[5e-4, 6e-4, 7e-4], hole_pair_spacing=[0.005, 0.025])}
     counts = _dry(tmp_path, cfg, "design_s")
     assert counts == {"design_solve": 6, "design_mesh": 6 + 4, "design_wall_motion": 1 + 1, "design_corner_solve": 8,
-                      "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_s": 1}, counts
+                      "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                      "design_s": 1}, counts
     assert _dry(tmp_path, cfg, "design_s_rung_check") == {"design_mesh": 4, "design_wall_motion": 1,
-                                                          "design_corner_solve": 8, "design_s_rung_check": 1}
+                                                          "design_corner_solve": 8, "design_rung_check": 1,
+                                                          "design_s_rung_check": 1}
     # on the segment: the corner points' one-way runs serve the check, only the 4 fully coupled solves are added
     mini = deep_merge(copy.deepcopy(BASE), MINI)
     mini["design_studies"] = {"s": grid(model="2", hole_diameter=[5e-4, 6e-4, 7e-4], hole_pair_spacing=[0.005, 0.01])}
     counts = _dry(tmp_path, mini, "design_s")
     assert counts == {"design_solve": 6, "design_mesh": 6, "design_wall_motion": 1, "design_corner_solve": 4,
-                      "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_s": 1}, counts
+                      "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                      "design_s": 1}, counts
 
 
 def test_shipped_studies_are_checked():
@@ -297,7 +302,8 @@ def _pretend_done(work: Path, cfg: dict, name: str) -> None:
     runs = [f for pair in corner_run_paths(st).values() for f in pair]
     stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in every for e in ("msh", "json")]
               + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in every],
-              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs, [f"results/designs/{name}.nc"],
+              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs,
+              [f"results/designs/{name}/rung_check.nc"], [f"results/designs/{name}.nc"],
               [f"results/figures/designs/{name}_{k}.{e}" for k in design_figure_kinds(st)
                for e in cfg["figures"]["formats"]]]
     for i, stage in enumerate(stages):
@@ -326,5 +332,5 @@ def test_only_a_moved_corner_reruns(tmp_path):
                                                "design_figures": 1, "design_map": 1, "design_s": 1}
     cfg["design_studies"]["s"]["grid"]["parameters"]["hole_diameter"][1:] = [6e-4, 8e-4]
     assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1 + 1, "design_solve": 2, "design_corner_solve": 2 * 2,
-                                               "design_dataset": 1, "design_figures": 1, "design_map": 1,
-                                               "design_s": 1}
+                                               "design_rung_check": 1, "design_dataset": 1, "design_figures": 1,
+                                               "design_map": 1, "design_s": 1}

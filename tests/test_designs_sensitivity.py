@@ -205,4 +205,4 @@ def test_dry_run_of_a_saltelli_study(tmp_path):
     counts = _dry(tmp_path, cfg, "design_s")
     # and the rung check's 4 corners of the bounds on the 10 mm segment (one mesh, a wall each, two solves each)
     assert counts == {"design_solve": 16, "design_mesh": 1 + 1, "design_wall_motion": 16 + 4, "design_dataset": 1,
-                      "design_corner_solve": 2 * 4, "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts
+                      "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts

@@ -609,10 +609,10 @@ def _load_run(path) -> xr.Dataset:
         return ds.load()
 
 
-def rung_check_summary(st: Study, error: np.ndarray, inside: list) -> str:
+def rung_check_summary(st: Study, error: np.ndarray, inside: list | None) -> str:
     """One paragraph on the study's rung check (the dataset's attribute rung_check, the figures' captions): what
-    was checked, the largest error against the tolerance, the corners beyond it and the points outside the
-    checked region (or that there are none)."""
+    was checked, the largest error against the tolerance, the corners beyond it and (unless `inside` is None) the
+    points outside the checked region (or that there are none)."""
     ch = st.check
     if ch is None:
         return (f"not checked: the study's rung is {st.rung}" if st.rung == rc.REFERENCE_RUNG else
@@ -628,20 +628,24 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list) -> str:
     text += (f"; corners beyond the tolerance: {', '.join(bad)}" if bad else "; every corner within it")
     if unmeasured:
         text += f" (no finite error at {', '.join(unmeasured)})"
+    if inside is None:
+        return text
     out = [p.id for p, i in zip(st.points, inside) if not i]
     text += (f"; {len(out)} of {len(st.points)} design points outside the checked region: {', '.join(out)}" if out
              else "; every design point inside the checked region")
     return text
 
 
-def rung_check_variables(st: Study, corner_paths: dict) -> tuple[dict, dict, dict, np.ndarray]:
-    """(data variables, coordinates, attributes, per-point trusted flags) of the rung check from the corners' run
-    files {corner id: (rung run path, fully coupled run path)} (ureterfsi.rung_check)."""
+def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
+    """The rung check of study `name` (ureterfsi.rung_check) from its corners' run files {corner id: (run on the
+    study's rung, fully coupled run)}: per corner and quantity the relative error, its maximum over the corners,
+    the tolerance, per corner whether it is within it and both solves' wall times, the corners' parameter values;
+    the attribute rung_check says what was checked and what is outside (rung_check_summary). CF-annotated
+    (ureterfsi.metadata.rung_check_metadata)."""
+    st = studies(cfg)[name]
     ch = st.check
-    inside = [ch.inside(p.values) if ch else False for p in st.points]
     if ch is None:
-        return {}, {}, {"rung_check": rung_check_summary(st, np.zeros((0, len(QUANTITIES))), inside)}, \
-            np.zeros(len(st.points), np.int8)
+        raise ValueError(f"design study {name} has no rung check (design_studies.{name}.rung_check.corners: none)")
     error, wall = np.full((len(ch.corners), len(QUANTITIES)), np.nan), np.full((len(ch.corners), 2), np.nan)
     for i, c in enumerate(ch.corners):
         runs = [_load_run(path) for path in corner_paths[c.id]]
@@ -649,29 +653,58 @@ def rung_check_variables(st: Study, corner_paths: dict) -> tuple[dict, dict, dic
         error[i] = rc.relative_errors(rung, ref, QUANTITIES)
         wall[i] = [float(r.attrs.get("wall_time_s", np.nan)) for r in runs]
     corner_ok = np.array([np.nanmax(e, initial=0.0) <= ch.tolerance for e in error])
-    trusted = np.array([i and bool(corner_ok.all()) for i in inside], np.int8)
-    data = {"rung_error": (("corner", "quantity"), error),
-            "max_rung_error": (("quantity",), np.nanmax(np.where(np.isfinite(error), error, -np.inf), axis=0)),
-            "corner_within_tolerance": (("corner",), corner_ok.astype(np.int8)),
-            "corner_rung_wall_time": (("corner",), wall[:, 0]),
-            "corner_reference_wall_time": (("corner",), wall[:, 1]),
-            "rung_tolerance": ((), ch.tolerance)}
-    data["max_rung_error"] = (("quantity",), np.where(np.isfinite(error).any(axis=0), data["max_rung_error"][1], np.nan))
-    coords = {"corner": ("corner", [c.id for c in ch.corners]), "quantity": ("quantity", list(QUANTITIES))}
-    coords |= {f"corner_{q}": ("corner", [c.values[q] for c in ch.corners]) for q in st.parameters}
-    attrs = {"rung_check": rung_check_summary(st, error, inside), "rung_check_corners": ch.mode,
+    measured = np.isfinite(error).any(axis=0)
+    worst = np.where(measured, np.nanmax(np.where(np.isfinite(error), error, -np.inf), axis=0), np.nan)
+    ds = xr.Dataset({"rung_error": (("corner", "quantity"), error),
+                     "max_rung_error": (("quantity",), worst),
+                     "corner_within_tolerance": (("corner",), corner_ok.astype(np.int8)),
+                     "corner_rung_wall_time": (("corner",), wall[:, 0]),
+                     "corner_reference_wall_time": (("corner",), wall[:, 1]),
+                     "rung_tolerance": ((), ch.tolerance)},
+                    coords={"corner": ("corner", [c.id for c in ch.corners]), "quantity": ("quantity", list(QUANTITIES)),
+                            **{f"corner_{q}": ("corner", [c.values[q] for c in ch.corners]) for q in st.parameters}})
+    meta = rung_check_metadata(st.parameters) | {"quantity": VARIABLES["quantity"]}
+    for k in ds.variables:
+        ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
+    attrs = {"rung_check": rung_check_summary(st, error, None), "rung_check_corners": ch.mode,
              "rung_check_tolerance": ch.tolerance, "rung_check_segment": ch.segment,
              "rung_check_max_error": float(np.nanmax(error)) if np.isfinite(error).any() else np.nan,
-             "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
+             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
              "rung_check_reused_points": ch.reuses,
-             "rung_check_outside_points": [p.id for p, i in zip(st.points, inside) if not i],
              "rung_check_corners_beyond_tolerance": [c.id for c, k in zip(ch.corners, corner_ok) if not k]}
-    return data, coords, attrs, trusted
+    ds.attrs.update(provenance_attrs(cfg, study=name, model=st.model, mesh_level=st.level,
+                                     corners={c.id: c.values for c in ch.corners},
+                                     corner_symmetry={c.id: c.symmetry for c in ch.corners}))
+    ds.attrs.update({k: v if isinstance(v, (int, float, str)) else json.dumps(v) for k, v in attrs.items()})
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi design study {name}: {st.rung} against {rc.REFERENCE_RUNG} at the corners"
+    return ds
 
 
-def study_dataset(cfg: dict, name: str, paths: dict, corner_paths: dict | None = None):
-    """Dataset of a study from its run files {point id: path} and, for a checked study, its corners' run files
-    {corner id: (rung run, fully coupled run)} (see the module docstring and ureterfsi.rung_check)."""
+RUNG_CHECK_COPIED = ("rung_error", "max_rung_error", "corner_within_tolerance", "corner_rung_wall_time",
+                     "corner_reference_wall_time", "rung_tolerance")
+
+
+def _rung_check_part(st: Study, check) -> tuple[xr.Dataset | None, dict, np.ndarray, np.ndarray]:
+    """(the check's variables, its attributes, per point: inside the checked region, trusted) for study_dataset."""
+    inside = np.array([st.check.inside(p.values) if st.check else False for p in st.points])
+    if check is None:
+        if st.check is not None:
+            raise ValueError(f"design study {st.name} is checked at its corners: pass its rung check dataset")
+        return None, {"rung_check": rung_check_summary(st, np.zeros((0, len(QUANTITIES))), list(inside))}, \
+            inside.astype(np.int8), np.zeros(len(st.points), np.int8)
+    all_ok = bool(np.asarray(check["corner_within_tolerance"].values).all())
+    part = check[list(RUNG_CHECK_COPIED)]
+    attrs = {k: v for k, v in check.attrs.items() if k.startswith("rung_check")}
+    attrs["rung_check"] = rung_check_summary(st, check["rung_error"].values, list(inside))   # with the points
+    attrs["rung_check_outside_points"] = json.dumps([p.id for p, i in zip(st.points, inside) if not i])
+    return part, attrs, inside.astype(np.int8), (inside & all_ok).astype(np.int8)
+
+
+def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = None):
+    """Dataset of a study from its run files {point id: path} and, for a checked study, its rung check
+    (rung_check_dataset), whose variables and attributes it takes, with per point whether it lies in the checked
+    region and whether it is trusted there (see the module docstring and ureterfsi.rung_check)."""
     st = studies(cfg)[name]
     runs = {p.id: _load_run(paths[p.id]) for p in st.points}
     tc = cfg["time"]
@@ -701,17 +734,16 @@ def study_dataset(cfg: dict, name: str, paths: dict, corner_paths: dict | None =
     vars_["hole_flux"] = (("design", "hole", "time"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
     vars_ |= mesh_motion_variables(st.points, runs)
-    check_vars, check_coords, check_attrs, trusted = rung_check_variables(st, corner_paths or {})
-    vars_["in_rung_check_region"] = (("design",), np.array([st.check.inside(p.values) if st.check else False
-                                                            for p in st.points], np.int8))
+    check_part, check_attrs, inside, trusted = _rung_check_part(st, check)
+    vars_["in_rung_check_region"] = (("design",), inside)
     vars_["rung_trusted"] = (("design",), trusted)
-    vars_ |= check_vars
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
               "hole_axis": (("design", "hole"), hole_axis)}
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
-    coords |= check_coords
     ds = xr.Dataset(vars_, coords=coords)
+    if check_part is not None:
+        ds = ds.merge(check_part)
     meta = VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters} | rung_check_metadata(st.parameters)
     if st.kind == "full_factorial":
         if len(st.parameters) == 1:   # one parameter: a plain index, nothing to unstack

@@ -329,6 +329,15 @@ def design_corner_mem_mb(w):
     return solve_mem_mb(w.corner_rung, st.check.corner(w.corner).symmetry, st.level)
 
 
+def design_dataset_inputs(w):
+    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
+    st = DESIGNS[w.design_study]
+    out = {"runs": [ureter_designs.point_run_path(st.name, p.id) for p in st.points]}
+    if st.check:
+        out["check"] = f"results/designs/{st.name}/rung_check.nc"
+    return out
+
+
 def design_corner_runs(w):
     """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.corner_run_paths)."""
     pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()

@@ -6,9 +6,10 @@
 #   results/designs/{study}/rung_check/{corner}/{rung}.nc   design_corner_solve: a corner of the design space on
 #       the segment, on the study's rung and fully coupled (ureterfsi.rung_check); a corner that is a point of a
 #       study on the segment reuses the point's run
+#   results/designs/{study}/rung_check.nc       design_rung_check: the rung error per corner and quantity
 #   results/designs/{study}.nc                  design_dataset
 #   results/figures/designs/{study}_*.{ext}     design_figures, design_map, design_sensitivity
-# Targets: design_<study> per study, design_<study>_rung_check (its corners' solves alone), designs_all.
+# Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 DESIGN_MESHES = {
     p.mesh_id: (st, p)
     for st in DESIGNS.values()
@@ -101,13 +102,20 @@ if DESIGNS:
         script:
             "../scripts/design_solve.py"
 
+    rule design_rung_check:
+        input:
+            design_corner_runs,
+        output:
+            "results/designs/{design_study}/rung_check.nc",
+        log:
+            "results/logs/designs/{design_study}_rung_check.log",
+        threads: 1
+        script:
+            "../scripts/design_rung_check.py"
+
     rule design_dataset:
         input:
-            runs=lambda w: [
-                ureter_designs.point_run_path(w.design_study, p.id)
-                for p in DESIGNS[w.design_study].points
-            ],
-            corners=design_corner_runs,
+            unpack(design_dataset_inputs),
         output:
             "results/designs/{design_study}.nc",
         log:
@@ -164,17 +172,13 @@ if DESIGNS:
                 f"results/designs/{_study}.nc",
                 design_figures(_study),
 
-        rule:
-            name:
-                f"design_{_study}_rung_check"
-            input:
-                [
-                    f
-                    for pair in ureter_designs.corner_run_paths(
-                        DESIGNS[_study]
-                    ).values()
-                    for f in pair
-                ],
+        if DESIGNS[_study].check:
+
+            rule:
+                name:
+                    f"design_{_study}_rung_check"
+                input:
+                    f"results/designs/{_study}/rung_check.nc",
 
     rule designs_all:
         input:
