@@ -661,7 +661,8 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
                      "corner_rung_wall_time": (("corner",), wall[:, 0]),
                      "corner_reference_wall_time": (("corner",), wall[:, 1]),
                      "rung_tolerance": ((), ch.tolerance)},
-                    coords={"corner": ("corner", [c.id for c in ch.corners]), "quantity": ("quantity", list(QUANTITIES)),
+                    coords={"corner": ("corner", [c.id for c in ch.corners]),
+                            "quantity": ("quantity", list(QUANTITIES)),
                             **{f"corner_{q}": ("corner", [c.values[q] for c in ch.corners]) for q in st.parameters}})
     meta = rung_check_metadata(st.parameters) | {"quantity": VARIABLES["quantity"]}
     for k in ds.variables:
