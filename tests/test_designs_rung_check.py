@@ -69,6 +69,20 @@ def test_relative_errors():
     e = rc.relative_errors({"p": 1.1, "q": 0.0, "r": 2.0, "s": np.nan}, {"p": 1.0, "q": 0.0, "r": 0.0, "s": 1.0},
                            ["p", "q", "r", "s"])
     assert e[0] == pytest.approx(0.1) and e[1] == 0.0 and np.isnan(e[2]) and np.isnan(e[3])
+    # a scale of the quantity (a peak outlet flow near 0 against the flow's largest |Q|)
+    e = rc.relative_errors({"p": 0.0, "r": 2.0}, {"p": 1e-12, "r": 0.0}, ["p", "r"], {"p": 1e-9, "r": 4.0})
+    assert e.tolist() == pytest.approx([1e-3, 0.5])
+
+
+def test_outlet_flow_errors_are_relative_to_the_flow():
+    """The peak and mean outlet flow's errors over the run's largest |Q_out|, the backflow's over integral |Q_out| dt."""
+    from ureterfsi.designs import error_scales
+
+    t = np.linspace(0.0, 0.04, 5)
+    run = xr.Dataset({"outlet_flux": ("time", np.array([0.0, -2.0, -4.0, 1.0, 2.0]))}, coords={"time": t})
+    s = error_scales(run)
+    assert s["peak_outlet_flux"] == s["mean_outlet_flux"] == 4.0
+    assert s["backflow_volume"] == pytest.approx(0.01 * (1 + 3 + 2.5 + 1.5))
 
 
 # ------------------------------------------------------------------------------------------ a study's corners

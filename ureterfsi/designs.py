@@ -636,6 +636,14 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None) -> str
     return text
 
 
+def error_scales(run) -> dict:
+    """The scales of the outlet-flow scalars of a (fully coupled) run for their rung errors (ureterfsi.rung_check):
+    max |Q_out| for the peak and the mean outlet flow, integral |Q_out| dt for the backflow volume."""
+    t, q = run["time"].values.astype(float), run["outlet_flux"].values.astype(float)
+    peak = float(np.max(np.abs(q)))
+    return {"peak_outlet_flux": peak, "mean_outlet_flux": peak, "backflow_volume": _trapz(np.abs(q), t)}
+
+
 def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     """The rung check of study `name` (ureterfsi.rung_check) from its corners' run files {corner id: (run on the
     study's rung, fully coupled run)}: per corner and quantity the relative error, its maximum over the corners,
@@ -650,7 +658,7 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     for i, c in enumerate(ch.corners):
         runs = [_load_run(path) for path in corner_paths[c.id]]
         rung, ref = (point_scalars(r) for r in runs)
-        error[i] = rc.relative_errors(rung, ref, QUANTITIES)
+        error[i] = rc.relative_errors(rung, ref, QUANTITIES, error_scales(runs[1]))
         wall[i] = [float(r.attrs.get("wall_time_s", np.nan)) for r in runs]
     corner_ok = np.array([np.nanmax(e, initial=0.0) <= ch.tolerance for e in error])
     measured = np.isfinite(error).any(axis=0)

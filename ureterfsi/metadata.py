@@ -226,8 +226,9 @@ DESIGN_PARAMETERS = {
 RUNG_CHECK_VARIABLES = {
     "corner": ("1", "id of a corner of the design space (hash of its parameter values) where the study's rung is "
                     "checked against the fully coupled model"),
-    "rung_error": ("1", "relative error of the study's rung at the corner, |q_rung - q_fully_coupled| / "
-                        "|q_fully_coupled| (the fully coupled value at the same corner)"),
+    "rung_error": ("1", "relative error of the study's rung at the corner, |q_rung - q_fully_coupled| / s, s the "
+                        "fully coupled run's scale: max |Q_out| for the peak and mean outlet flow, integral |Q_out| "
+                        "dt for the backflow volume, |q_fully_coupled| for the others"),
     "max_rung_error": ("1", "largest relative error of the study's rung over the corners"),
     "rung_tolerance": ("1", "largest relative error of the study's rung at a corner the check accepts "
                             "(design_studies.<study>.rung_check.tolerance)"),

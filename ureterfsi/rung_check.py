@@ -7,10 +7,15 @@ partitioned``, 3D, the corner's mesh) solve the corner's configuration on the se
 ``design_studies.<study>.rung_check.segment``, an overlay: the 10 mm segment of ``tests/data/mini-ureter.yaml``),
 each its own job; the dataset records, per corner and per scalar quantity, the relative error
 
-    e = |q_rung - q_fully_coupled| / |q_fully_coupled|
+    e = |q_rung - q_fully_coupled| / s_q
 
-(the denominator: the fully coupled value of the same quantity at the same corner; the ladder's max norm
-``ureterfsi.ladder`` of a scalar; NaN where the fully coupled value is 0 and the rung's is not, 0 where both are).
+with s_q the fully coupled run's own scale of the quantity at the same corner, as the ladder (``ureterfsi.ladder``)
+divides by the max norm of the reference: for the outlet-flow scalars (peak and mean outlet flow) the largest
+|outlet flow| over the run, for the backflow volume the volume through the outlet (integral |Q_out| dt) - a peak or
+a mean of a flow that barely turns is near 0 in a short window and would make |q_fc| meaningless as a scale (2 steps
+on the 10 mm segment: peak outlet flow 0 on one rung, 1e-12 m3/s on the other, "100 %") - and for the other
+quantities (shares, peak stress, peak displacement, peak pressure drop) |q_fully_coupled| itself (``ureterfsi.designs.error_scales``; NaN
+where the scale is 0 and the values differ, 0 where they agree).
 
 Corners (``corners``): ``all`` - every combination of each varied parameter's minimum and maximum (2^D); ``axes``
 - each varied parameter at its minimum and its maximum with the others at the centre (the base value clipped to
@@ -153,16 +158,17 @@ def reference_config(cfg: dict) -> dict:
     return out
 
 
-def relative_errors(rung: dict, reference: dict, quantities) -> np.ndarray:
-    """|q_rung - q_ref| / |q_ref| of each quantity (NaN where either is NaN, or q_ref = 0 != q_rung; 0 where both
-    are 0)."""
+def relative_errors(rung: dict, reference: dict, quantities, scales: dict | None = None) -> np.ndarray:
+    """|q_rung - q_ref| / s_q of each quantity, s_q = scales[q] where given, else |q_ref| (NaN where either value is
+    NaN, or s_q = 0 while the values differ; 0 where they agree)."""
     out = []
     for q in quantities:
         a, b = float(reference[q]), float(rung[q])
+        s = abs(float((scales or {}).get(q, a)))
         if not (np.isfinite(a) and np.isfinite(b)):
             out.append(np.nan)
-        elif a == 0.0:
-            out.append(0.0 if b == 0.0 else np.nan)
+        elif a == b:
+            out.append(0.0)
         else:
-            out.append(abs(b - a) / abs(a))
+            out.append(abs(b - a) / s if s > 0 else np.nan)
     return np.array(out, float)
