@@ -348,3 +348,33 @@ def test_only_a_moved_corner_reruns(tmp_path):
     assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1 + 1, "design_solve": 2, "design_corner_solve": 2 * 2,
                                                "design_rung_check": 1, "design_dataset": 1, "design_figures": 1,
                                                "design_map": 1, "design_s": 1}
+
+
+def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
+    """A fully coupled corner solve that fails (the thin-gap corner f = 0.7 inverts the harmonic mesh motion at 40
+    ms) is recorded by its job as a run file holding the failure: the check names it, no error is claimed there, and
+    no point is trusted."""
+    from ureterfsi.designs import write_failed_corner
+
+    cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
+    st = studies(cfg)["s"]
+    paths, corners = {}, {}
+    for p in st.points:
+        paths[p.id] = tmp_path / f"{p.id}.nc"
+        _fake_run(paths[p.id], 1e-9, 1e-5)
+    for i, c in enumerate(st.check.corners):
+        corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
+        _fake_run(corners[c.id][0], 1e-9, 1e-5)
+        if i == 0:
+            write_failed_corner(c.config, corners[c.id][1], "fully_coupled", "(fully_coupled) failed: ALE mesh inverted")
+        else:
+            _fake_run(corners[c.id][1], 1e-9, 1e-5)
+    check = rung_check_dataset(cfg, "s", corners)
+    first = st.check.corners[0].id
+    assert np.isnan(check["rung_error"].sel(corner=first).values).all()
+    assert check["corner_within_tolerance"].values.tolist() == [0, 1, 1, 1]
+    assert json.loads(check.attrs["rung_check_failed_corners"]) == {first: "(fully_coupled) failed: ALE mesh inverted"}
+    ds = study_dataset(cfg, "s", paths, check)
+    text = ds.attrs["rung_check"]
+    assert f"every corner solved within it; not checked (a solve failed) at {first}: (fully_coupled) failed" in text
+    assert (ds["rung_trusted"].values == 0).all() and (ds["in_rung_check_region"].values == 1).all()

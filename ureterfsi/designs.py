@@ -609,10 +609,11 @@ def _load_run(path) -> xr.Dataset:
         return ds.load()
 
 
-def rung_check_summary(st: Study, error: np.ndarray, inside: list | None) -> str:
+def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed: dict | None = None) -> str:
     """One paragraph on the study's rung check (the dataset's attribute rung_check, the figures' captions): what
-    was checked, the largest error against the tolerance, the corners beyond it and (unless `inside` is None) the
-    points outside the checked region (or that there are none)."""
+    was checked, the largest error against the tolerance, the corners beyond it, those whose solve failed
+    (`failed`: corner id -> message) and (unless `inside` is None) the points outside the checked region (or that
+    there are none)."""
     ch = st.check
     if ch is None:
         return (f"not checked: the study's rung is {st.rung}" if st.rung == rc.REFERENCE_RUNG else
@@ -623,17 +624,30 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None) -> str
     text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME}) at {len(ch.corners)} corners "
             f"({ch.mode}) of the design space on {where}: largest relative error {worst:.2g} "
             f"(tolerance {ch.tolerance:g})")
-    bad = [c.id for c, e in zip(ch.corners, error) if not np.nanmax(e, initial=0.0) <= ch.tolerance]
-    unmeasured = [c.id for c, e in zip(ch.corners, error) if not np.isfinite(e).any()]
-    text += (f"; corners beyond the tolerance: {', '.join(bad)}" if bad else "; every corner within it")
+    failed = failed or {}
+    bad = [c.id for c, e in zip(ch.corners, error) if c.id not in failed and not np.nanmax(e, initial=0.0) <= ch.tolerance]
+    unmeasured = [c.id for c, e in zip(ch.corners, error) if c.id not in failed and not np.isfinite(e).any()]
+    text += (f"; corners beyond the tolerance: {', '.join(bad)}" if bad else
+             "; every corner solved within it" if failed else "; every corner within it")
     if unmeasured:
         text += f" (no finite error at {', '.join(unmeasured)})"
+    if failed:
+        text += "; not checked (a solve failed) at " + "; ".join(f"{k}: {v}" for k, v in failed.items())
     if inside is None:
         return text
     out = [p.id for p, i in zip(st.points, inside) if not i]
     text += (f"; {len(out)} of {len(st.points)} design points outside the checked region: {', '.join(out)}" if out
              else "; every design point inside the checked region")
     return text
+
+
+def write_failed_corner(cfg: dict, path, rung: str, message: str) -> None:
+    """The run file of a corner whose solve on `rung` failed: no data, the failure in its attribute solve_failed
+    (rung_check_dataset reports the corner as not checked)."""
+    from .metadata import write_netcdf
+
+    ds = xr.Dataset(attrs=provenance_attrs(cfg, rung=rung, solve_failed=message))
+    write_netcdf(ds, path, title=f"ureterfsi rung-check corner: the {rung} solve failed")
 
 
 def error_scales(run) -> dict:
@@ -655,12 +669,17 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     if ch is None:
         raise ValueError(f"design study {name} has no rung check (design_studies.{name}.rung_check.corners: none)")
     error, wall = np.full((len(ch.corners), len(QUANTITIES)), np.nan), np.full((len(ch.corners), 2), np.nan)
+    failed = {}
     for i, c in enumerate(ch.corners):
         runs = [_load_run(path) for path in corner_paths[c.id]]
+        failed.update({c.id: r.attrs["solve_failed"] for r in runs if "solve_failed" in r.attrs})
+        if c.id in failed:
+            continue
         rung, ref = (point_scalars(r) for r in runs)
         error[i] = rc.relative_errors(rung, ref, QUANTITIES, error_scales(runs[1]))
         wall[i] = [float(r.attrs.get("wall_time_s", np.nan)) for r in runs]
-    corner_ok = np.array([np.nanmax(e, initial=0.0) <= ch.tolerance for e in error])
+    corner_ok = np.array([c.id not in failed and np.nanmax(e, initial=0.0) <= ch.tolerance
+                          for c, e in zip(ch.corners, error)])
     measured = np.isfinite(error).any(axis=0)
     worst = np.where(measured, np.nanmax(np.where(np.isfinite(error), error, -np.inf), axis=0), np.nan)
     ds = xr.Dataset({"rung_error": (("corner", "quantity"), error),
@@ -675,11 +694,11 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     meta = rung_check_metadata(st.parameters) | {"quantity": VARIABLES["quantity"]}
     for k in ds.variables:
         ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
-    attrs = {"rung_check": rung_check_summary(st, error, None), "rung_check_corners": ch.mode,
+    attrs = {"rung_check": rung_check_summary(st, error, None, failed), "rung_check_corners": ch.mode,
              "rung_check_tolerance": ch.tolerance, "rung_check_segment": ch.segment,
              "rung_check_max_error": float(np.nanmax(error)) if np.isfinite(error).any() else np.nan,
              "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
-             "rung_check_reused_points": ch.reuses,
+             "rung_check_reused_points": ch.reuses, "rung_check_failed_corners": failed,
              "rung_check_corners_beyond_tolerance": [c.id for c, k in zip(ch.corners, corner_ok) if not k]}
     ds.attrs.update(provenance_attrs(cfg, study=name, model=st.model, mesh_level=st.level,
                                      corners={c.id: c.values for c in ch.corners},
@@ -705,7 +724,8 @@ def _rung_check_part(st: Study, check) -> tuple[xr.Dataset | None, dict, np.ndar
     all_ok = bool(np.asarray(check["corner_within_tolerance"].values).all())
     part = check[list(RUNG_CHECK_COPIED)]
     attrs = {k: v for k, v in check.attrs.items() if k.startswith("rung_check")}
-    attrs["rung_check"] = rung_check_summary(st, check["rung_error"].values, list(inside))   # with the points
+    failed = json.loads(check.attrs.get("rung_check_failed_corners", "{}"))
+    attrs["rung_check"] = rung_check_summary(st, check["rung_error"].values, list(inside), failed)   # with the points
     attrs["rung_check_outside_points"] = json.dumps([p.id for p, i in zip(st.points, inside) if not i])
     return part, attrs, inside.astype(np.int8), (inside & all_ok).astype(np.int8)
 
