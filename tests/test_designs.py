@@ -258,7 +258,9 @@ def test_impossible_stricture_designs_refused(params, parameter, text):
 
 
 def test_stricture_changes_wall_and_mesh():
-    st = studies(config_with(s=grid(hole_diameter=[5e-4, 7e-4], stricture_fraction=[0.0, 0.5])))["s"]
+    # the 50 mm model's stricture (at 25 mm) does not fit the 10 mm segment of the rung check: not checked here
+    st = studies(config_with(s=grid(hole_diameter=[5e-4, 7e-4], stricture_fraction=[0.0, 0.5])
+                             | {"rung_check": {"corners": "none"}}))["s"]
     by = {(p.values["hole_diameter"], p.values["stricture_fraction"]): p for p in st.points}
     assert by[5e-4, 0.5].config["geometry"]["stricture_fraction"] == 0.5
     assert by[5e-4, 0.0].wall_id == by[7e-4, 0.0].wall_id != by[5e-4, 0.5].wall_id == by[7e-4, 0.5].wall_id
