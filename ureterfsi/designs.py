@@ -30,6 +30,11 @@ Saltelli design adds the point of each sample row (``saltelli_point``: rows repe
 each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
 (``sobol_indices``, SALib.analyze.sobol).
 
+Trust at every point (``ureterfsi.rung_check``): a study on a rung cheaper than fully coupled is checked at the corners
+of its design space (``expand_rung_check``: each corner a Point on the 10 mm segment, solved on the study's rung and
+fully coupled; ``rung_check_dataset``: the rung error per corner and quantity), and its dataset says per point
+whether it lies in the checked region with every corner within the tolerance.
+
 SALib and scipy.stats (~1 s to import) are imported where a sample is drawn or analysed: configuration validation
 imports this module.
 """
