@@ -90,10 +90,16 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
             "hole_diameter": [5e-4, 7e-4], "peak_traction": [4e4, 6e4]}}}
     cfg = load_config(cfg, {"design_studies": {"s": grid}})
     paths = {}
-    for p in designs.studies(cfg)["s"].points:
+    st = designs.studies(cfg)["s"]
+    for p in st.points:
         paths[p.id] = tmp_path / f"{p.id}.nc"
         metadata.write_netcdf(synthetic_run(cfg, "3", end=cfg["time"]["end"]), paths[p.id])
-    return designs.study_dataset(cfg, "s", paths)
+    corners = {}                                   # the rung check's corners (ureterfsi.rung_check)
+    for c in st.check.corners:
+        corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
+        for k, f in enumerate(corners[c.id]):
+            metadata.write_netcdf(synthetic_run(c.config, "3", end=c.config["time"]["end"], wall_time=1.0 + k), f)
+    return designs.study_dataset(cfg, "s", paths, designs.rung_check_dataset(cfg, "s", corners))
 
 
 KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",

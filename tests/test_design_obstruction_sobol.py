@@ -52,5 +52,8 @@ def test_dry_run_of_the_shipped_saltelli_study(tmp_path):
     for f in FILES:                                              # the overlays as the command line merges them
         cfg = deep_merge(cfg, read_yaml(f))
     counts = _dry(tmp_path, cfg, f"design_{NAME}")
-    assert counts == {"design_solve": 64, "design_mesh": 32, "design_wall_motion": 32, "design_dataset": 1,
-                      "design_figures": 1, "design_sensitivity": 1, f"design_{NAME}": 1}, counts
+    # and the rung check at the 8 corners of the bounds (on the study's own 10 mm segment: 4 meshes and 4 walls of
+    # their own, since no sample point sits at a corner), each on the one-way rung and fully coupled
+    assert counts == {"design_solve": 64, "design_mesh": 32 + 4, "design_wall_motion": 32 + 4, "design_dataset": 1,
+                      "design_corner_solve": 2 * 8, "design_rung_check": 1, "design_figures": 1, "design_sensitivity": 1,
+                      f"design_{NAME}": 1}, counts

@@ -109,8 +109,14 @@ def test_dry_run_of_a_100_point_study(tmp_path):
     cfg["design_studies"] = {"big": grid(hole_diameter=[float(v) for v in np.linspace(5e-4, 9e-4, 10)],
                                          wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
     counts = _dry(tmp_path, cfg, "design_big")
-    assert counts == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10, "design_dataset": 1,
-                      "design_figures": 1, "design_map": 1, "design_big": 1}, counts
+    # the rung check (default on for the one-way rung): 4 corners on the 10 mm segment (2 hole diameters: 2 meshes;
+    # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.rung_check)
+    assert counts == {"design_solve": 100, "design_mesh": 10 + 2, "design_wall_motion": 10 + 2, "design_dataset": 1,
+                      "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
+    cfg["design_studies"]["big"]["rung_check"] = {"corners": "none"}
+    assert _dry(tmp_path, cfg, "design_big") == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10,
+                                                 "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                                                 "design_big": 1}
 
 
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
@@ -132,6 +138,7 @@ def test_one_stent_change_reruns_only_that_points_mesh_and_solve(tmp_path):
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"oat": grid("one_at_a_time", hole_diameter=[5e-4, 7e-4, 8e-4],
                                          wall_stiffness_scale=[0.5, 1.0])}
+    cfg["design_studies"]["oat"]["rung_check"] = {"corners": "none"}    # the points' chain alone (corners: below)
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     _pretend_done(tmp_path, cfg, "oat")
@@ -152,9 +159,11 @@ def test_two_by_two_grid_end_to_end(tmp_path):
         "parameters": {"hole_diameter": [5e-4, 6e-4], "peak_traction": [4e4, 5e4]}}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=600)))
-    assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_dataset": 1,
-                      "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
+    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_mini", timeout=900)))
+    # the rung check: the grid's 4 points are its corners on the segment (this study's own): their one-way runs
+    # serve it, and each gets a fully coupled solve (partitioned) on its mesh
+    assert counts == {"design_mesh": 2, "design_wall_motion": 2, "design_solve": 4, "design_corner_solve": 4,
+                      "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1, "design_mini": 1}, counts
     with xr.open_dataset(tmp_path / "results/designs/mini.nc", decode_times=False) as ds:
         ds.load()
     print("\n2x2 design study:", {q: ds[q].values.round(12).tolist() for q in (
@@ -172,6 +181,22 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     # the wall moves more under the larger load, whatever the hole
     disp = ds["peak_wall_displacement"].values
     assert (disp[:, 1] > disp[:, 0]).all(), disp
+    # the rung error of each corner (here every point) and quantity, against the fully coupled solve of 2 steps
+    err = ds["rung_error"]
+    print("rung errors (corner x quantity):", list(err["quantity"].values), err.values.round(5).tolist(),
+          ds.attrs["rung_check"], "wall times one-way / fully coupled:", ds["corner_rung_wall_time"].values,
+          ds["corner_reference_wall_time"].values)
+    assert err.dims == ("corner", "quantity") and set(err["corner"].values) == set(ds["point_id"].values.ravel())
+    for q in ("peak_outlet_flux", "peak_wall_displacement", "peak_stent_von_mises", "hole_exchange_fraction"):
+        assert np.isfinite(err.sel(quantity=q).values).all() and (err.sel(quantity=q).values < 0.5).all(), q
+    assert ds.attrs["rung_check"].startswith("one_way checked against fully_coupled (partitioned) at 4 corners (all) "
+                                             "of the design space on the study's own segment")
+    assert (ds["in_rung_check_region"].values == 1).all()
+    assert (ds["rung_trusted"].values == ds["corner_within_tolerance"].values.all()).all()
+    for c in err["corner"].values:
+        assert (tmp_path / f"results/designs/mini/rung_check/{c}/fully_coupled.nc").exists()
+        assert not (tmp_path / f"results/designs/mini/rung_check/{c}/one_way.nc").exists()     # the point's run
+        assert (tmp_path / f"results/benchmarks/designs/mini/rung_check/{c}_fully_coupled.tsv").exists()
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
         assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
@@ -188,6 +213,7 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     html = report.read_text(errors="replace")
     assert "mini_map.png" in html and "mini_parameters.png" in html and "snakemake.wildcards" not in html
     assert "Design map of study mini" in html
+    assert ds.attrs["rung_check"].replace("'", "&#x27;") in html or ds.attrs["rung_check"] in html  # caption: measured
     for p in ds["point_id"].values.ravel():
         assert (tmp_path / f"results/logs/designs/mini/{p}.log").stat().st_size > 0
         assert (tmp_path / f"results/benchmarks/designs/mini/{p}.tsv").exists()
@@ -232,7 +258,9 @@ def test_impossible_stricture_designs_refused(params, parameter, text):
 
 
 def test_stricture_changes_wall_and_mesh():
-    st = studies(config_with(s=grid(hole_diameter=[5e-4, 7e-4], stricture_fraction=[0.0, 0.5])))["s"]
+    # the 50 mm model's stricture (at 25 mm) does not fit the 10 mm segment of the rung check: not checked here
+    st = studies(config_with(s=grid(hole_diameter=[5e-4, 7e-4], stricture_fraction=[0.0, 0.5])
+                             | {"rung_check": {"corners": "none"}}))["s"]
     by = {(p.values["hole_diameter"], p.values["stricture_fraction"]): p for p in st.points}
     assert by[5e-4, 0.5].config["geometry"]["stricture_fraction"] == 0.5
     assert by[5e-4, 0.0].wall_id == by[7e-4, 0.0].wall_id != by[5e-4, 0.5].wall_id == by[7e-4, 0.5].wall_id
@@ -254,7 +282,8 @@ def test_strictured_design_point_end_to_end(tmp_path):
 
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {"narrow": {"model": "2", "level": "coarse", "rung": "one_way", "grid": {"parameters": {
-        "stricture_fraction": [0.6], "stricture_length": [0.004], "stricture_position": [0.005]}}}}
+        "stricture_fraction": [0.6], "stricture_length": [0.004], "stricture_position": [0.005]}},
+        "rung_check": {"corners": "none"}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_narrow", timeout=600)))
@@ -307,7 +336,8 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
 
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {f"gap{k}": {"model": "2", "level": "coarse", "rung": "one_way",
-                                         "one_way_mesh_motion": "auto", "grid": {"parameters": {
+                                         "one_way_mesh_motion": "auto", "rung_check": {"corners": "none"},
+                                         "grid": {"parameters": {
         "stricture_fraction": [0.7], "hole_pair_spacing": [s], "stricture_length": [0.004],
         "stricture_position": [0.005]}}} for k, s in ((10, 0.010), (5, 0.005))}
     path = tmp_path / "cfg.yaml"
@@ -490,7 +520,7 @@ def _one_point(tmp_path, name: str, params: dict):
     study dataset)."""
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {name: {"model": "2", "level": "coarse", "rung": "one_way",
-                                    "grid": {"parameters": params}}}
+                                    "grid": {"parameters": params}, "rung_check": {"corners": "none"}}}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", f"design_{name}", timeout=900)))

@@ -114,7 +114,7 @@ def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):
     in SALib's order), with the registry's metadata."""
     from SALib.analyze import sobol
 
-    cfg = config_with(s=saltelli(size=8))
+    cfg = config_with(s=saltelli(size=8) | {"rung_check": {"corners": "none"}})      # the indices alone
     st = studies(cfg)["s"]
     f = {"peak_outlet_flux": lambda x: 1e-9 * (1.5 + 2 * x[:, 0] / 7e4 + np.sin(3 * x[:, 1])),
          "peak_wall_displacement": lambda x: 1e-4 * x[:, 1] ** 2 * (x[:, 0] / 7e4)}
@@ -203,5 +203,6 @@ def test_dry_run_of_a_saltelli_study(tmp_path):
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"s": saltelli(size=4)}
     counts = _dry(tmp_path, cfg, "design_s")
-    assert counts == {"design_solve": 16, "design_mesh": 1, "design_wall_motion": 16, "design_dataset": 1,
-                      "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts
+    # and the rung check's 4 corners of the bounds on the 10 mm segment (one mesh, a wall each, two solves each)
+    assert counts == {"design_solve": 16, "design_mesh": 1 + 1, "design_wall_motion": 16 + 4, "design_dataset": 1,
+                      "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts

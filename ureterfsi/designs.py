@@ -30,6 +30,11 @@ Saltelli design adds the point of each sample row (``saltelli_point``: rows repe
 each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
 (``sobol_indices``, SALib.analyze.sobol).
 
+Trust at every point (``ureterfsi.rung_check``): a study on a rung cheaper than fully coupled is checked at the corners
+of its design space (``expand_rung_check``: each corner a Point on the 10 mm segment, solved on the study's rung and
+fully coupled; ``rung_check_dataset``: the rung error per corner and quantity), and its dataset says per point
+whether it lies in the checked region with every corner within the tolerance.
+
 SALib and scipy.stats (~1 s to import) are imported where a sample is drawn or analysed: configuration validation
 imports this module.
 """
@@ -49,8 +54,9 @@ from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
 from .geometry import SYMMETRY_FRACTION, UreterGeometry
-from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta
+from .metadata import DESIGN_PARAMETERS, VARIABLES, cf_meta, rung_check_metadata
 from .provenance import provenance_attrs
+from . import rung_check as rc
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
@@ -114,6 +120,30 @@ class Point:
 
 
 @dataclass
+class RungCheck:
+    """The study's rung checked against the fully coupled model at the corners of its design space
+    (ureterfsi.rung_check)."""
+    mode: str                          # all | axes (auto resolved)
+    tolerance: float
+    segment: str                       # the segment overlay's path, as configured
+    on_segment: bool                   # the study runs on the segment itself (its corners reuse its points)
+    low: dict                          # parameter -> minimum of the design space
+    high: dict                         # parameter -> maximum
+    centre: dict                       # parameter -> the axes corners' centre
+    corners: list = field(default_factory=list)   # Point per corner (its configuration on the segment)
+    reuses: dict = field(default_factory=dict)    # corner id -> the study point whose run is the corner's rung run
+
+    def inside(self, values: dict) -> bool:
+        return rc.inside(values, self.mode, self.low, self.high, self.centre)
+
+    def corner(self, corner_id: str) -> "Point":
+        for c in self.corners:
+            if c.id == corner_id:
+                return c
+        raise KeyError(f"the rung check has no corner {corner_id}")
+
+
+@dataclass
 class Study:
     name: str
     model: str
@@ -125,6 +155,7 @@ class Study:
     grid: dict = field(default_factory=dict)   # full factorial: parameter -> values (the dataset's dimensions)
     points: list = field(default_factory=list)
     rows: list = field(default_factory=list)   # saltelli: the point id of each sample row, in SALib's order
+    check: "RungCheck | None" = None           # the rung check at the corners (None: not checked)
 
     def point(self, point_id: str) -> Point:
         for p in self.points:
@@ -371,7 +402,90 @@ def expand_study(cfg: dict, name: str) -> Study:
         symmetry = point_symmetry(pcfg, base_symmetry)
         study.points.append(Point(pid, values, pcfg, _short_hash(mesh_sections(pcfg, model, spec["level"], symmetry)),
                                   _short_hash(wall_sections(pcfg)) if rung == "one_way" else None, symmetry))
+    study.check = expand_rung_check(cfg, name, spec, study)
     return study
+
+
+def _space(spec: dict, names: list, all_values: list) -> tuple[dict, dict]:
+    """(low, high) of the study's design space: a sample's bounds, else the points' extremes."""
+    if "sample" in spec:
+        b = spec["sample"]["bounds"]
+        return {p: _round(b[p][0]) for p in names}, {p: _round(b[p][1]) for p in names}
+    return rc.ranges(all_values, names)
+
+
+def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungCheck | None:
+    """The corners of study `name` (ureterfsi.rung_check), each a Point on the segment with its configuration,
+    mesh and wall; None if the study is not checked. A corner on a study that runs on the segment is one of its
+    points when the grid holds it (`reuses`: its rung run is the point's). ConfigError (one line) for a corner that
+    cannot be posed on the segment."""
+    key = f"design_studies.{name}.rung_check"
+    opts = rc.check_spec(spec.get("rung_check"), study.rung)
+    if opts["corners"] == "none":
+        return None
+    if study.rung == rc.REFERENCE_RUNG:
+        raise ConfigError(f"{key}.corners", f"the study's rung is {rc.REFERENCE_RUNG} already: nothing to check; "
+                                            f"set none")
+    low, high = _space(spec, study.parameters, [p.values for p in study.points])
+    mode = rc.corner_mode(opts["corners"], low, high)
+    try:
+        overlay = rc.segment_overlay(opts["segment"])
+    except ConfigError as err:
+        raise ConfigError(f"{key}.segment", err.constraint) from None
+    seg = rc.segment_config(cfg, overlay)
+    check = RungCheck(mode, float(opts["tolerance"]), opts["segment"], rc.on_segment(cfg, overlay), low, high,
+                      rc.centre(low, high, study.base))
+    base_symmetry = run_rung(cfg, study.model)[1]
+    for values in rc.corner_values(mode, low, high, study.base):
+        values = {p: _round(v) for p, v in values.items()}
+        cid = point_id(values)
+        ccfg = apply(seg, study.model, values)
+        ccfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", ccfg["solver"]["one_way_mesh_motion"])
+        try:
+            check_config(ccfg)
+        except ConfigError as err:
+            raise ConfigError(key, f"corner {cid} ({_values_text(values)}) cannot be posed on the segment "
+                                   f"{opts['segment']}: {err.key}: {err.constraint}") from None
+        symmetry = point_symmetry(ccfg, base_symmetry)
+        if symmetry == "axisymmetric":
+            raise ConfigError(key, f"the fully coupled reference of corner {cid} needs a 3D mesh; model "
+                                   f"{study.model} runs axisymmetric")
+        corner = Point(cid, values, ccfg, _short_hash(mesh_sections(ccfg, study.model, study.level, symmetry)),
+                       _short_hash(wall_sections(ccfg)) if study.rung == "one_way" else None, symmetry)
+        check.corners.append(corner)
+        same = next((p for p in study.points if p.id == cid), None)
+        if same is not None and (same.mesh_id, same.symmetry) == (corner.mesh_id, corner.symmetry) and \
+                solve_sections(same.config, study.model) == solve_sections(ccfg, study.model):
+            check.reuses[cid] = same.id
+    return check
+
+
+def point_run_path(study: str, point: str) -> str:
+    """The run file of a design point (rule design_solve)."""
+    return f"results/designs/{study}/{point}/run.nc"
+
+
+def corner_run_path(study: str, corner: str, rung: str) -> str:
+    """The run file of a corner's solve on `rung` (rule design_corner_solve)."""
+    return f"results/designs/{study}/rung_check/{corner}/{rung}.nc"
+
+
+def corner_run_paths(st: Study) -> dict:
+    """{corner id: (run file on the study's rung, fully coupled run file)} of a checked study; the rung's run of
+    a corner that is one of the study's points (on its segment) is that point's."""
+    if st.check is None:
+        return {}
+    return {c.id: (point_run_path(st.name, st.check.reuses[c.id]) if c.id in st.check.reuses
+                   else corner_run_path(st.name, c.id, st.rung), corner_run_path(st.name, c.id, rc.REFERENCE_RUNG))
+            for c in st.check.corners}
+
+
+def corner_solve_request(st: Study, corner_id: str, rung: str) -> tuple[Point, dict]:
+    """(corner, configuration) of a corner's solve on `rung`: the study's rung or the fully coupled reference."""
+    if st.check is None or rung not in (st.rung, rc.REFERENCE_RUNG):
+        raise KeyError(f"design study {st.name} checks no corner {corner_id} on {rung}")
+    c = st.check.corner(corner_id)
+    return c, rc.reference_config(c.config) if rung == rc.REFERENCE_RUNG else c.config
 
 
 _CACHE: dict = {}
@@ -392,19 +506,23 @@ def check_design_studies(cfg: dict) -> None:
     studies(cfg)
 
 
+def _points_and_corners(st: Study) -> list:
+    return st.points + (st.check.corners if st.check else [])
+
+
 def mesh_request(cfg: dict, mesh_id: str) -> tuple[dict, str, str, str]:
-    """(configuration, model, level, symmetry) of a design mesh, from the first point that uses it."""
+    """(configuration, model, level, symmetry) of a design mesh, from the first point (or corner) that uses it."""
     for st in studies(cfg).values():
-        for p in st.points:
+        for p in _points_and_corners(st):
             if p.mesh_id == mesh_id:
                 return p.config, st.model, st.level, p.symmetry
     raise KeyError(f"no design point uses mesh {mesh_id}")
 
 
 def wall_config(cfg: dict, wall_id: str) -> dict:
-    """Configuration of a design wall motion, from the first point that uses it."""
+    """Configuration of a design wall motion, from the first point (or corner) that uses it."""
     for st in studies(cfg).values():
-        for p in st.points:
+        for p in _points_and_corners(st):
             if p.wall_id == wall_id:
                 return p.config
     raise KeyError(f"no design point uses wall motion {wall_id}")
@@ -491,13 +609,138 @@ def mesh_motion_variables(points, runs) -> dict:
             "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 
-def study_dataset(cfg: dict, name: str, paths: dict):
-    """Dataset of a study from its run files {point id: path} (see the module docstring)."""
+def _load_run(path) -> xr.Dataset:
+    with xr.open_dataset(path, decode_times=False) as ds:
+        return ds.load()
+
+
+def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed: dict | None = None) -> str:
+    """One paragraph on the study's rung check (the dataset's attribute rung_check, the figures' captions): what
+    was checked, the largest error against the tolerance, the corners beyond it, those whose solve failed
+    (`failed`: corner id -> message) and (unless `inside` is None) the points outside the checked region (or that
+    there are none)."""
+    ch = st.check
+    if ch is None:
+        return (f"not checked: the study's rung is {st.rung}" if st.rung == rc.REFERENCE_RUNG else
+                f"not checked (design_studies.{st.name}.rung_check.corners: none): the {st.rung} rung's error at "
+                f"these designs is not measured")
+    where = "the study's own segment" if ch.on_segment else f"the segment {ch.segment}"
+    worst = float(np.nanmax(error)) if np.isfinite(error).any() else np.nan
+    text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME}) at {len(ch.corners)} corners "
+            f"({ch.mode}) of the design space on {where}: largest relative error {worst:.2g} "
+            f"(tolerance {ch.tolerance:g})")
+    failed = failed or {}
+    bad = [c.id for c, e in zip(ch.corners, error) if c.id not in failed and not np.nanmax(e, initial=0.0) <= ch.tolerance]
+    unmeasured = [c.id for c, e in zip(ch.corners, error) if c.id not in failed and not np.isfinite(e).any()]
+    text += (f"; corners beyond the tolerance: {', '.join(bad)}" if bad else
+             "; every corner solved within it" if failed else "; every corner within it")
+    if unmeasured:
+        text += f" (no finite error at {', '.join(unmeasured)})"
+    if failed:
+        text += "; not checked (a solve failed) at " + "; ".join(f"{k}: {v}" for k, v in failed.items())
+    if inside is None:
+        return text
+    out = [p.id for p, i in zip(st.points, inside) if not i]
+    text += (f"; {len(out)} of {len(st.points)} design points outside the checked region: {', '.join(out)}" if out
+             else "; every design point inside the checked region")
+    return text
+
+
+def write_failed_corner(cfg: dict, path, rung: str, message: str) -> None:
+    """The run file of a corner whose solve on `rung` failed: no data, the failure in its attribute solve_failed
+    (rung_check_dataset reports the corner as not checked)."""
+    from .metadata import write_netcdf
+
+    ds = xr.Dataset(attrs=provenance_attrs(cfg, rung=rung, solve_failed=message))
+    write_netcdf(ds, path, title=f"ureterfsi rung-check corner: the {rung} solve failed")
+
+
+def error_scales(run) -> dict:
+    """The scales of the outlet-flow scalars of a (fully coupled) run for their rung errors (ureterfsi.rung_check):
+    max |Q_out| for the peak and the mean outlet flow, integral |Q_out| dt for the backflow volume."""
+    t, q = run["time"].values.astype(float), run["outlet_flux"].values.astype(float)
+    peak = float(np.max(np.abs(q)))
+    return {"peak_outlet_flux": peak, "mean_outlet_flux": peak, "backflow_volume": _trapz(np.abs(q), t)}
+
+
+def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
+    """The rung check of study `name` (ureterfsi.rung_check) from its corners' run files {corner id: (run on the
+    study's rung, fully coupled run)}: per corner and quantity the relative error, its maximum over the corners,
+    the tolerance, per corner whether it is within it and both solves' wall times, the corners' parameter values;
+    the attribute rung_check says what was checked and what is outside (rung_check_summary). CF-annotated
+    (ureterfsi.metadata.rung_check_metadata)."""
     st = studies(cfg)[name]
-    runs = {}
-    for p in st.points:
-        with xr.open_dataset(paths[p.id], decode_times=False) as ds:
-            runs[p.id] = ds.load()
+    ch = st.check
+    if ch is None:
+        raise ValueError(f"design study {name} has no rung check (design_studies.{name}.rung_check.corners: none)")
+    error, wall = np.full((len(ch.corners), len(QUANTITIES)), np.nan), np.full((len(ch.corners), 2), np.nan)
+    failed = {}
+    for i, c in enumerate(ch.corners):
+        runs = [_load_run(path) for path in corner_paths[c.id]]
+        failed.update({c.id: r.attrs["solve_failed"] for r in runs if "solve_failed" in r.attrs})
+        if c.id in failed:
+            continue
+        rung, ref = (point_scalars(r) for r in runs)
+        error[i] = rc.relative_errors(rung, ref, QUANTITIES, error_scales(runs[1]))
+        wall[i] = [float(r.attrs.get("wall_time_s", np.nan)) for r in runs]
+    corner_ok = np.array([c.id not in failed and np.nanmax(e, initial=0.0) <= ch.tolerance
+                          for c, e in zip(ch.corners, error)])
+    measured = np.isfinite(error).any(axis=0)
+    worst = np.where(measured, np.nanmax(np.where(np.isfinite(error), error, -np.inf), axis=0), np.nan)
+    ds = xr.Dataset({"rung_error": (("corner", "quantity"), error),
+                     "max_rung_error": (("quantity",), worst),
+                     "corner_within_tolerance": (("corner",), corner_ok.astype(np.int8)),
+                     "corner_rung_wall_time": (("corner",), wall[:, 0]),
+                     "corner_reference_wall_time": (("corner",), wall[:, 1]),
+                     "rung_tolerance": ((), ch.tolerance)},
+                    coords={"corner": ("corner", [c.id for c in ch.corners]),
+                            "quantity": ("quantity", list(QUANTITIES)),
+                            **{f"corner_{q}": ("corner", [c.values[q] for c in ch.corners]) for q in st.parameters}})
+    meta = rung_check_metadata(st.parameters) | {"quantity": VARIABLES["quantity"]}
+    for k in ds.variables:
+        ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
+    attrs = {"rung_check": rung_check_summary(st, error, None, failed), "rung_check_corners": ch.mode,
+             "rung_check_tolerance": ch.tolerance, "rung_check_segment": ch.segment,
+             "rung_check_max_error": float(np.nanmax(error)) if np.isfinite(error).any() else np.nan,
+             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
+             "rung_check_reused_points": ch.reuses, "rung_check_failed_corners": failed,
+             "rung_check_corners_beyond_tolerance": [c.id for c, k in zip(ch.corners, corner_ok) if not k]}
+    ds.attrs.update(provenance_attrs(cfg, study=name, model=st.model, mesh_level=st.level,
+                                     corners={c.id: c.values for c in ch.corners},
+                                     corner_symmetry={c.id: c.symmetry for c in ch.corners}))
+    ds.attrs.update({k: v if isinstance(v, (int, float, str)) else json.dumps(v) for k, v in attrs.items()})
+    ds.attrs["Conventions"] = "CF-1.8"
+    ds.attrs["title"] = f"ureterfsi design study {name}: {st.rung} against {rc.REFERENCE_RUNG} at the corners"
+    return ds
+
+
+RUNG_CHECK_COPIED = ("rung_error", "max_rung_error", "corner_within_tolerance", "corner_rung_wall_time",
+                     "corner_reference_wall_time", "rung_tolerance")
+
+
+def _rung_check_part(st: Study, check) -> tuple[xr.Dataset | None, dict, np.ndarray, np.ndarray]:
+    """(the check's variables, its attributes, per point: inside the checked region, trusted) for study_dataset."""
+    inside = np.array([st.check.inside(p.values) if st.check else False for p in st.points])
+    if check is None:
+        if st.check is not None:
+            raise ValueError(f"design study {st.name} is checked at its corners: pass its rung check dataset")
+        return None, {"rung_check": rung_check_summary(st, np.zeros((0, len(QUANTITIES))), list(inside))}, \
+            inside.astype(np.int8), np.zeros(len(st.points), np.int8)
+    all_ok = bool(np.asarray(check["corner_within_tolerance"].values).all())
+    part = check[list(RUNG_CHECK_COPIED)]
+    attrs = {k: v for k, v in check.attrs.items() if k.startswith("rung_check")}
+    failed = json.loads(check.attrs.get("rung_check_failed_corners", "{}"))
+    attrs["rung_check"] = rung_check_summary(st, check["rung_error"].values, list(inside), failed)   # with the points
+    attrs["rung_check_outside_points"] = json.dumps([p.id for p, i in zip(st.points, inside) if not i])
+    return part, attrs, inside.astype(np.int8), (inside & all_ok).astype(np.int8)
+
+
+def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = None):
+    """Dataset of a study from its run files {point id: path} and, for a checked study, its rung check
+    (rung_check_dataset), whose variables and attributes it takes, with per point whether it lies in the checked
+    region and whether it is trusted there (see the module docstring and ureterfsi.rung_check)."""
+    st = studies(cfg)[name]
+    runs = {p.id: _load_run(paths[p.id]) for p in st.points}
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
@@ -525,12 +768,17 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     vars_["hole_flux"] = (("design", "hole", "time"), hole_series)
     vars_["model_fraction"] = (("design",), np.array([SYMMETRY_FRACTION[p.symmetry] for p in st.points]))
     vars_ |= mesh_motion_variables(st.points, runs)
+    check_part, check_attrs, inside, trusted = _rung_check_part(st, check)
+    vars_["in_rung_check_region"] = (("design",), inside)
+    vars_["rung_trusted"] = (("design",), trusted)
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
               "hole_axis": (("design", "hole"), hole_axis)}
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
     ds = xr.Dataset(vars_, coords=coords)
-    meta = VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters}
+    if check_part is not None:
+        ds = ds.merge(check_part)
+    meta = VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters} | rung_check_metadata(st.parameters)
     if st.kind == "full_factorial":
         if len(st.parameters) == 1:   # one parameter: a plain index, nothing to unstack
             ds = ds.swap_dims(design=st.parameters[0]).drop_vars("design")
@@ -551,6 +799,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
                                      base_values=st.base,
                                      points={p.id: p.values for p in st.points},
                                      point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points}))
+    ds.attrs.update({k: v if isinstance(v, (int, float, str)) else json.dumps(v) for k, v in check_attrs.items()})
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi design study {name}: model {st.model}, {st.kind}, {len(st.points)} points"
     return ds
@@ -568,6 +817,13 @@ def standardised_regression_coefficients(ds, parameters, quantity: str) -> tuple
     beta, *_ = np.linalg.lstsq(np.c_[np.ones(len(ys)), Xs], ys, rcond=None)
     r2 = 1.0 - float(np.sum((ys - np.c_[np.ones(len(ys)), Xs] @ beta) ** 2)) / max(float(np.sum(ys ** 2)), 1e-300)
     return beta[1:], r2
+
+
+def design_figure_kinds(st: Study) -> list:
+    """The figures of a study: parameters; a map for a full-factorial grid over two or more parameters with two or
+    more values; sensitivity for a sample."""
+    return (["parameters"] + (["map"] if len(map_parameters(st.grid)) >= 2 else [])
+            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else []))
 
 
 def map_parameters(grid: dict) -> list:

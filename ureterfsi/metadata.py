@@ -110,7 +110,7 @@ VARIABLES = {
     "design": ("1", "design point id (hash of its parameter values)"),
     "point_id": ("1", "design point id (hash of its parameter values)"),
     "saltelli_point": ("1", "index along design of the point of each row of the Saltelli design (rows may repeat)"),
-    "quantity": ("1", "name of the design quantity the sensitivity indices are of"),
+    "quantity": ("1", "name of the design quantity (of the sensitivity indices and the rung errors)"),
     "parameter": ("1", "name of the design parameter (in the sample's column order)"),
     "sobol_first_order": ("1", "first-order Sobol' index S1 = V[E(y | x_j)] / V(y) (SALib.analyze.sobol)"),
     "sobol_first_order_conf": ("1", "half-width of the 95 % bootstrap confidence interval of sobol_first_order"),
@@ -221,6 +221,32 @@ DESIGN_PARAMETERS = {
     "hole_pair_rotation": ("degree", "angle between the axes of successive side-hole pairs"),
     "stent_eccentricity": ("m", "offset of the stent axis from the ureter axis, along x"),
 }
+# the rung check of a design study at the corners of its design space (ureterfsi.rung_check); the corners'
+# parameter coordinates come from rung_check_metadata
+RUNG_CHECK_VARIABLES = {
+    "corner": ("1", "id of a corner of the design space (hash of its parameter values) where the study's rung is "
+                    "checked against the fully coupled model"),
+    "rung_error": ("1", "relative error of the study's rung at the corner, |q_rung - q_fully_coupled| / s, s the "
+                        "fully coupled run's scale: max |Q_out| for the peak and mean outlet flow, integral |Q_out| "
+                        "dt for the backflow volume, |q_fully_coupled| for the others"),
+    "max_rung_error": ("1", "largest relative error of the study's rung over the corners"),
+    "rung_tolerance": ("1", "largest relative error of the study's rung at a corner the check accepts "
+                            "(design_studies.<study>.rung_check.tolerance)"),
+    "corner_within_tolerance": ("1", "1 if every quantity's rung error at the corner is within the tolerance, else 0"),
+    "corner_rung_wall_time": ("s", "wall-clock time of the corner's solve on the study's rung"),
+    "corner_reference_wall_time": ("s", "wall-clock time of the corner's fully coupled solve"),
+    "in_rung_check_region": ("1", "1 if the design point lies in the convex hull of the checked corners, else 0"),
+    "rung_trusted": ("1", "1 if the design point lies in the checked region and every corner is within the "
+                          "tolerance, else 0"),
+}
+
+
+def rung_check_metadata(parameters) -> dict:
+    """RUNG_CHECK_VARIABLES with each parameter's value at the corners (corner_<parameter>)."""
+    return RUNG_CHECK_VARIABLES | {f"corner_{p}": (DESIGN_PARAMETERS[p][0], f"{DESIGN_PARAMETERS[p][1]}, at the corner")
+                                   for p in parameters}
+
+
 # the GCI dataset (ureterfsi.gci); the templated entries come from gci_variables
 GCI_VARIABLES = {
     "cells": VARIABLES["cells"],

@@ -249,15 +249,9 @@ def stability_inputs(w):
 def design_figures(study):
     """The figure files of a design study: parameters; a map for a full-factorial grid over two or more
     parameters with two or more values; sensitivity for sampled studies."""
-    st = DESIGNS[study]
-    kinds = ["parameters"]
-    if len(ureter_designs.map_parameters(st.grid)) >= 2:
-        kinds.append("map")
-    if st.kind in ("sobol", "latin_hypercube", "saltelli"):
-        kinds.append("sensitivity")
     return [
         f"results/figures/designs/{study}_{k}.{ext}"
-        for k in kinds
+        for k in ureter_designs.design_figure_kinds(DESIGNS[study])
         for ext in FIGURE_FORMATS
     ]
 
@@ -308,3 +302,59 @@ def design_solve_mem_mb(w):
     """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
     st = DESIGNS[w.design_study]
     return solve_mem_mb(st.rung, st.point(w.point).symmetry, st.level)
+
+
+def design_corner_inputs(w):
+    """A corner's mesh, and on the one-way rung its wall motion (the fully coupled solve moves its own wall)."""
+    c = DESIGNS[w.design_study].check.corner(w.corner)
+    out = {"mesh": f"results/designs/meshes/{c.mesh_id}.msh"}
+    if w.corner_rung == "one_way":
+        out["wall"] = f"results/designs/wall_motion/{c.wall_id}.nc"
+    return out
+
+
+def design_corner_study(w):
+    """The configuration entering a corner's solve, with its rung and symmetry (rerun trigger)."""
+    st = DESIGNS[w.design_study]
+    c, cfg = ureter_designs.corner_solve_request(st, w.corner, w.corner_rung)
+    sections = ureter_designs.solve_sections(cfg, st.model)
+    return json.dumps(
+        sections | {"rung": w.corner_rung, "symmetry": c.symmetry}, sort_keys=True
+    )
+
+
+def design_corner_mem_mb(w):
+    """MiB a corner's solve reserves: that of a study solve on its rung, symmetry and level."""
+    st = DESIGNS[w.design_study]
+    return solve_mem_mb(w.corner_rung, st.check.corner(w.corner).symmetry, st.level)
+
+
+def design_dataset_inputs(w):
+    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
+    st = DESIGNS[w.design_study]
+    out = {"runs": [ureter_designs.point_run_path(st.name, p.id) for p in st.points]}
+    if st.check:
+        out["check"] = f"results/designs/{st.name}/rung_check.nc"
+    return out
+
+
+def design_corner_runs(w):
+    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.corner_run_paths)."""
+    pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()
+    return [f for pair in pairs for f in pair]
+
+
+def design_rung_check_caption(wildcards, input):
+    """The dataset's rung_check attribute for the figure captions, once the dataset exists (a function of input:
+    Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report).
+    """
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(input[0], decode_times=False) as ds:
+            return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
+    except (
+        OSError,
+        ValueError,
+    ):  # not made yet (or an empty file of `snakemake --touch`)
+        return "measured when the study's dataset is made (its attribute rung_check)"

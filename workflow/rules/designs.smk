@@ -3,11 +3,24 @@
 #   results/designs/meshes/{mesh_id}.msh        design_mesh
 #   results/designs/wall_motion/{wall_id}.nc    design_wall_motion (one-way rung)
 #   results/designs/{study}/{point}/run.nc      design_solve
+#   results/designs/{study}/rung_check/{corner}/{rung}.nc   design_corner_solve: a corner of the design space on
+#       the segment, on the study's rung and fully coupled (ureterfsi.rung_check); a corner that is a point of a
+#       study on the segment reuses the point's run
+#   results/designs/{study}/rung_check.nc       design_rung_check: the rung error per corner and quantity
 #   results/designs/{study}.nc                  design_dataset
 #   results/figures/designs/{study}_*.{ext}     design_figures, design_map, design_sensitivity
-# Targets: design_<study> per study, designs_all.
-DESIGN_MESHES = {p.mesh_id: (st, p) for st in DESIGNS.values() for p in st.points}
-DESIGN_WALLS = {p.wall_id: p for st in DESIGNS.values() for p in st.points if p.wall_id}
+# Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
+DESIGN_MESHES = {
+    p.mesh_id: (st, p)
+    for st in DESIGNS.values()
+    for p in st.points + (st.check.corners if st.check else [])
+}
+DESIGN_WALLS = {
+    p.wall_id: p
+    for st in DESIGNS.values()
+    for p in st.points + (st.check.corners if st.check else [])
+    if p.wall_id
+}
 
 
 if DESIGNS:
@@ -15,6 +28,8 @@ if DESIGNS:
     wildcard_constraints:
         design_study="|".join(DESIGNS),
         point="[0-9a-f]{10}",
+        corner="[0-9a-f]{10}",
+        corner_rung="one_way|fully_coupled",
         mesh_id="[0-9a-f]{10}",
         wall_id="[0-9a-f]{10}",
 
@@ -68,12 +83,39 @@ if DESIGNS:
         script:
             "../scripts/design_solve.py"
 
+    rule design_corner_solve:
+        input:
+            unpack(design_corner_inputs),
+        output:
+            "results/designs/{design_study}/rung_check/{corner}/{corner_rung}.nc",
+        log:
+            "results/logs/designs/{design_study}/rung_check/{corner}_{corner_rung}.log",
+        benchmark:
+            "results/benchmarks/designs/{design_study}/rung_check/{corner}_{corner_rung}.tsv"
+        threads: 1
+        resources:
+            mem_mb=design_corner_mem_mb,
+            runtime=24 * 60,
+        params:
+            study=design_corner_study,
+            checkpoint="results/checkpoints/designs/{design_study}/rung_check/{corner}_{corner_rung}.npz",
+        script:
+            "../scripts/design_solve.py"
+
+    rule design_rung_check:
+        input:
+            design_corner_runs,
+        output:
+            "results/designs/{design_study}/rung_check.nc",
+        log:
+            "results/logs/designs/{design_study}_rung_check.log",
+        threads: 1
+        script:
+            "../scripts/design_rung_check.py"
+
     rule design_dataset:
         input:
-            runs=lambda w: [
-                f"results/designs/{w.design_study}/{p.id}/run.nc"
-                for p in DESIGNS[w.design_study].points
-            ],
+            unpack(design_dataset_inputs),
         output:
             "results/designs/{design_study}.nc",
         log:
@@ -91,6 +133,7 @@ if DESIGNS:
             "results/logs/designs/{design_study}_figures.log",
         params:
             dpi=FIGURE_OPTIONS["dpi"],
+            rung_check=design_rung_check_caption,
         script:
             "../scripts/design_figures.py"
 
@@ -103,6 +146,7 @@ if DESIGNS:
             "results/logs/designs/{design_study}_map.log",
         params:
             dpi=FIGURE_OPTIONS["dpi"],
+            rung_check=design_rung_check_caption,
         script:
             "../scripts/design_figures.py"
 
@@ -115,6 +159,7 @@ if DESIGNS:
             "results/logs/designs/{design_study}_sensitivity.log",
         params:
             dpi=FIGURE_OPTIONS["dpi"],
+            rung_check=design_rung_check_caption,
         script:
             "../scripts/design_figures.py"
 
@@ -126,6 +171,14 @@ if DESIGNS:
             input:
                 f"results/designs/{_study}.nc",
                 design_figures(_study),
+
+        if DESIGNS[_study].check:
+
+            rule:
+                name:
+                    f"design_{_study}_rung_check"
+                input:
+                    f"results/designs/{_study}/rung_check.nc",
 
     rule designs_all:
         input:

@@ -1,11 +1,16 @@
-"""Snakemake script of rule `design_solve`: one design point on its study's rung (ureterfsi.study.cli.solve).
-A point that cannot be solved (refused before the solve, a step that fails, an inverted mesh) ends in one line
-naming the point, in the rule's log and in Snakemake's error report (ureterfsi.workflow_log.run_script)."""
+"""Snakemake script of rules `design_solve` (one design point on its study's rung) and `design_corner_solve` (a
+corner of the design space on the segment, on the study's rung or fully coupled: ureterfsi.rung_check), through
+ureterfsi.study.cli.solve. A point that cannot be solved (refused before the solve, a step that fails, an inverted
+mesh) ends in one line naming the point, in the rule's log and in Snakemake's error report
+(ureterfsi.workflow_log.run_script). A corner's solve that fails is recorded instead (a run file holding the
+failure, ureterfsi.designs.write_failed_corner): the rung is not checked there, which the study's rung check
+reports; the job succeeds so that the study's other corners and its points are still made."""
+import logging
 import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from ureterfsi.designs import studies  # noqa: E402
+from ureterfsi.designs import corner_solve_request, studies, write_failed_corner  # noqa: E402
 from ureterfsi.fsi import SolveFailure  # noqa: E402
 from ureterfsi.study.cli import solve  # noqa: E402
 from ureterfsi.study.oneway import MeshMotionRefused  # noqa: E402
@@ -16,14 +21,22 @@ from ureterfsi.workflow_log import run_script  # noqa: E402
 def main(smk):
     w = smk.wildcards
     study = studies(smk.config)[w.design_study]
-    point = study.point(w.point)
+    if smk.rule == "design_corner_solve":
+        point, cfg = corner_solve_request(study, w.corner, w.corner_rung)
+        rung, name = w.corner_rung, f"rung-check corner {w.design_study}/{point.id}"
+    else:
+        point = study.point(w.point)
+        cfg, rung, name = point.config, study.rung, f"design point {w.design_study}/{point.id}"
     spec = RunSpec(study.model, study.level, point.symmetry, smk.input.mesh)
     try:
-        solve(point.config, spec, study.rung, smk.output[0], smk.params.checkpoint, smk.input.get("wall"))
-    except MeshMotionRefused as err:
-        raise MeshMotionRefused(f"design point {w.design_study}/{point.id} refused before the solve: {err}") from None
-    except SolveFailure as err:
-        raise SolveFailure(f"design point {w.design_study}/{point.id} ({study.rung}) failed: {err}") from None
+        solve(cfg, spec, rung, smk.output[0], smk.params.checkpoint, smk.input.get("wall"))
+    except (MeshMotionRefused, SolveFailure) as err:
+        what = "refused before the solve" if isinstance(err, MeshMotionRefused) else f"({rung}) failed"
+        if smk.rule == "design_corner_solve":
+            logging.getLogger("ureterfsi").error("%s %s, recorded as not checked: %s", name, what, err)
+            write_failed_corner(cfg, smk.output[0], rung, f"{what}: {err}")
+            return
+        raise type(err)(f"{name} {what}: {err}") from None
 
 
 run_script(snakemake, lambda: main(snakemake))  # noqa: F821
