@@ -243,8 +243,8 @@ class PartitionedCoupling:
 
     def _weights(self) -> np.ndarray:
         """Per owned dof 1 / max(||x_f||_inf, newton_increment_floor / newton_field_rtol) of its field, at the current
-        state: the units relative to each field of Anderson's least squares and of the error bound (a field at rest, whose values are round-off,
-        weighed as a 1e-4 SI one, not amplified)."""
+        state: the units relative to each field of Anderson's least squares and of the error bound (a field at rest,
+        whose values are round-off, weighed as a 1e-4 SI one, not amplified)."""
         pb, o = self.pb, self.pb.options
         least = o.newton_increment_floor / (o.newton_field_rtol or o.newton_stol)
         w = np.zeros(pb.x.vector.getLocalSize())
@@ -323,13 +323,14 @@ class PartitionedCoupling:
 
     def error_bound(self, xs: list, gs: list) -> float:
         """Bound of the distance of G(x_k) = gs[-1] from the step's solution in the max norm relative to each field
-        (_weights): rho / (1 - rho) ||G(x_k) - x_k||, rho the largest secant ratio ||G(x_j) - G(x_j-1)|| / ||x_j - x_j-1||
-        of the owned iterates `xs` and their sweeps `gs` and of the previous step (self.contraction, updated here);
-        inf before two sweeps or when rho >= 1, 0 at a fixed point."""
+        (_weights): rho / (1 - rho) ||G(x_k) - x_k||, rho the largest secant ratio
+        ||G(x_j) - G(x_j-1)|| / ||x_j - x_j-1|| of the owned iterates `xs` and their sweeps `gs` and of the previous
+        step (self.contraction); inf before two sweeps or when rho >= 1, 0 at a fixed point."""
         w = self._weights()
         local = [np.abs((gs[-1] - xs[-1]) * w).max(initial=0.0)]
         for j in range(1, len(xs)):
-            local += [np.abs((gs[j] - gs[j - 1]) * w).max(initial=0.0), np.abs((xs[j] - xs[j - 1]) * w).max(initial=0.0)]
+            local += [np.abs((gs[j] - gs[j - 1]) * w).max(initial=0.0),
+                      np.abs((xs[j] - xs[j - 1]) * w).max(initial=0.0)]
         total = np.empty(len(local))
         self.pb.comm.Allreduce(np.array(local), total, op=MPI.MAX)
         change, pairs = total[0], total[1:].reshape(-1, 2)
