@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .checked_io import RUN_FILE, BadFile, Contract, open_netcdf
-from .metadata import annotate, at_time, cf_attrs, write_netcdf
+from .metadata import VARIABLES, annotate, at_time, cf_attrs, write_netcdf
 from .provenance import provenance_attrs
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
@@ -35,7 +35,7 @@ _SKIP_RUN_ATTRS = ("Conventions", "title")
 # what the readers of the study datasets (figures, ureterfsi.gci) rely on
 MODELS_DATASET = Contract("models dataset", attrs=("mesh_level", "models"),
                           variables=("model", "model_label", "time", "z", "probe_time", "outlet_flux",
-                                     "wall_radial_displacement", "outlet_hole_z"))
+                                     "wall_radial_displacement", "outlet_hole_z"), units=VARIABLES)
 CONVERGENCE_DATASET = Contract("mesh-convergence dataset", attrs=("model", "levels", "probe_time"),
                                variables=("level", "z", "stent_von_mises_line", "cells", "dofs",
                                           "peak_outlet_flux", "peak_stent_max_von_mises"))
