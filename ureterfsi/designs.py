@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from .checked_io import RUN_FILE, Contract, open_netcdf
 from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
@@ -491,13 +492,16 @@ def mesh_motion_variables(points, runs) -> dict:
             "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 
+# what the design figures (ureterfsi.plotting_designs, workflow/scripts/design_figures.py) rely on in a study's dataset
+DESIGN_DATASET = Contract("design-study dataset", attrs=("study", "design_kind", "model", "points"))
+
+
 def study_dataset(cfg: dict, name: str, paths: dict):
     """Dataset of a study from its run files {point id: path} (see the module docstring)."""
     st = studies(cfg)[name]
     runs = {}
     for p in st.points:
-        with xr.open_dataset(paths[p.id], decode_times=False) as ds:
-            runs[p.id] = ds.load()
+        runs[p.id] = open_netcdf(paths[p.id], RUN_FILE)
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())

@@ -4,10 +4,17 @@ from pathlib import Path
 
 from ureterfsi.aggregate import write_dataset
 from ureterfsi.designs import study_dataset
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO)  # noqa: F821
-name = snakemake.wildcards.design_study  # noqa: F821
-paths = {Path(p).parent.name: p for p in snakemake.input.runs}  # noqa: F821
-ds = study_dataset(snakemake.config, name, paths)  # noqa: F821
-write_dataset(ds, snakemake.output[0])  # noqa: F821
-logging.info("design study %s: %d points -> %s", name, len(paths), snakemake.output[0])  # noqa: F821
+smk = snakemake  # noqa: F821
+
+
+def main():
+    name = smk.wildcards.design_study
+    paths = {Path(p).parent.name: p for p in smk.input.runs}
+    ds = study_dataset(smk.config, name, paths)
+    write_dataset(ds, smk.output[0])
+    logging.info("design study %s: %d points -> %s", name, len(paths), smk.output[0])
+
+
+run_script(smk, main)
