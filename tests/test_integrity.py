@@ -376,3 +376,23 @@ def test_design_figures_of_a_stent_free_study():
         ds[v].attrs["units"] = "1"
     fig = parameters_figure(ds)
     assert fig.axes
+
+
+def test_run_of_another_level_or_model_is_named(tmp_path, cfg):
+    """A run file of another mesh level among a level's runs (was: ValueError naming no file, traceback in the
+    log), and of another model among a convergence study's levels."""
+    a, b = tmp_path / "model1_coarse.nc", tmp_path / "model2_coarse.nc"
+    synthetic_run(cfg, "1", end=0.5).to_netcdf(a)
+    other = synthetic_run(cfg, "2", end=0.5)
+    other.attrs["mesh_level"] = "fine"
+    other.to_netcdf(b)
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_models([a, b], cfg)
+    _one_line(err, b, f"a run of mesh level 'fine', combined with level 'coarse' ({a})")
+    c = tmp_path / "model3_medium.nc"
+    third = synthetic_run(cfg, "3", end=0.5)
+    third.attrs["mesh_level"] = "medium"
+    third.to_netcdf(c)
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_levels([b, c], 0.5, cfg)
+    _one_line(err, c, f"a run of model 3, combined with model 2 ({b}): a convergence study is one model")
