@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from .checked_io import RUN_FILE, Contract, open_netcdf
+from .checked_io import Contract, open_netcdf
 from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
@@ -492,6 +492,10 @@ def mesh_motion_variables(points, runs) -> dict:
             "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 
+# what study_dataset (point_scalars, mesh_motion_variables) relies on in a point's run file (a run file,
+# checked_io.RUN_FILE, of which it reads these)
+DESIGN_RUN = Contract("run file", variables=("time", "outlet_flux", "max_wall_displacement", "min_ale_jacobian"),
+                      units=VARIABLES)
 # what the design figures (ureterfsi.plotting_designs, workflow/scripts/design_figures.py) rely on in a study's dataset
 DESIGN_DATASET = Contract("design-study dataset", attrs=("study", "design_kind", "model", "points"))
 
@@ -501,7 +505,7 @@ def study_dataset(cfg: dict, name: str, paths: dict):
     st = studies(cfg)[name]
     runs = {}
     for p in st.points:
-        runs[p.id] = open_netcdf(paths[p.id], RUN_FILE)
+        runs[p.id] = open_netcdf(paths[p.id], DESIGN_RUN)
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
