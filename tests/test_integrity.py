@@ -396,3 +396,19 @@ def test_run_of_another_level_or_model_is_named(tmp_path, cfg):
     with pytest.raises(BadFile) as err:
         aggregate.combine_levels([b, c], 0.5, cfg)
     _one_line(err, c, f"a run of model 3, combined with model 2 ({b}): a convergence study is one model")
+
+
+def test_run_of_another_rung_in_a_runs_place_is_named(tmp_path, cfg):
+    """A one-way run copied into the fully coupled run's place (same model and level) was combined silently."""
+    p = tmp_path / "fully_coupled" / "model2_coarse.nc"
+    p.parent.mkdir()
+    run = synthetic_run(cfg, "2", end=0.5)
+    run.attrs.update(fidelity="one_way", symmetry="quarter")
+    run.to_netcdf(p)
+    expect = {str(p): {"model": "2", "mesh_level": "coarse", "fidelity": "fully_coupled", "symmetry": "quarter"}}
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_models([p], cfg, expect=expect)
+    _one_line(err, p, "a run of model 2, mesh_level coarse, fidelity one_way, symmetry quarter, but this file is "
+                      "the run of model 2, mesh_level coarse, fidelity fully_coupled, symmetry quarter")
+    expect[str(p)]["fidelity"] = "one_way"
+    assert aggregate.combine_models([p], cfg, expect=expect).sizes["model"] == 1

@@ -88,11 +88,24 @@ def _source(run: xr.Dataset) -> str:
     return str(run.encoding.get("source", "<run in memory>"))
 
 
-def _runs_by(paths, attr: str) -> dict:
-    """Run files keyed by one attribute (model, mesh_level); a duplicate key or no file is an error."""
+def check_identity(run: xr.Dataset, expect: dict) -> None:
+    """The run's attributes (model, mesh_level, fidelity, symmetry) are those `expect` names: a run file of
+    another model, level, rung or symmetry copied into a run's place is refused in one line naming it."""
+    got = {k: str(run.attrs.get(k)) for k in expect}
+    if got != {k: str(v) for k, v in expect.items()}:
+        def what(d):
+            return ", ".join(f"{k} {d[k]}" for k in expect)
+        raise BadFile(_source(run), f"a run of {what(got)}, but this file is the run of {what(expect)}")
+
+
+def _runs_by(paths, attr: str, expect: dict | None = None) -> dict:
+    """Run files keyed by one attribute (model, mesh_level); a duplicate key or no file is an error. `expect`:
+    {path: the attributes the run at that path must have} (check_identity)."""
     runs = {}
     for p in paths:
         run = open_run(p)
+        if expect and str(p) in expect:
+            check_identity(run, expect[str(p)])
         key = str(run.attrs[attr])
         if key in runs:
             raise BadFile(p, f"two runs with {attr} {key}: this one and {runs[key].encoding.get('source')}")
@@ -102,12 +115,13 @@ def _runs_by(paths, attr: str) -> dict:
     return runs
 
 
-def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> xr.Dataset:
+def combine_models(paths, cfg: dict | None = None, time_grid: str = "union", expect: dict | None = None) -> xr.Dataset:
     """Runs of one mesh level combined along `model` (see the module docstring).
 
     time_grid: "union" (every step time of every run) or "nominal" (0, dt, ..., end from cfg["time"]).
+    expect: {path: the attributes its run must have} (check_identity; rule aggregate_models passes them).
     """
-    runs = {m: _clean_time(run) for m, run in _runs_by(paths, "model").items()}
+    runs = {m: _clean_time(run) for m, run in _runs_by(paths, "model", expect).items()}
     first = next(iter(runs.values()))
     for r in runs.values():   # a file of another level in this level's place is named
         if str(r.attrs["mesh_level"]) != str(first.attrs["mesh_level"]):
