@@ -138,6 +138,11 @@ CATALOGUE = [
     ("hole_at_the_end_face", "geometry: {hole_end_clearance: 1.0e-4}\n", "geometry.hole_end_clearance",
      "must be > the hole radius 0.00025 m"),
     ("holes_odd", 'models: {"2": {holes: 21}}\n', "models.2.holes", "must be a positive even number"),
+    # the study's own runs cannot be made (was: `config check` said ok, only the dry run refused the mesh)
+    ("offset_stent_on_quarter_model", "geometry: {stent_offset: 2.0e-4}\n", "mesh.symmetry",
+     "geometry.stent_offset 0.0002 m breaks the x = 0 mirror plane: model 2 has no quarter model"),
+    ("offset_stent_run_quarter", 'geometry: {stent_offset: 2.0e-4}\nmesh: {symmetry: half}\n'
+     'study: {runs: {"3": {symmetry: quarter}}}\n', "study.runs.3.symmetry", "model 3 has no quarter model"),
     ("holes_without_stent", 'models: {"1": {holes: 2}}\n', "models.1.holes", "must be 0 for a model without a stent"),
     ("axisymmetric_stented_run", 'study: {runs: {"3": {symmetry: axisymmetric}}}\n', "study.runs.3.symmetry",
      "'axisymmetric' is only valid for a model without stent"),

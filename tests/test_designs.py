@@ -504,7 +504,9 @@ def test_offset_and_rotation_refusals():
     # 2.5 mm leaves 0.5 mm of the 3 mm annulus (17 %)
     with pytest.raises(ConfigError, match=r"^config error: geometry.stent_offset: 0.0025 m leaves a stent-wall gap"):
         load_config(BASE, {"geometry": {"stent_offset": 0.0025}})
-    offset = load_config(BASE, {"geometry": {"stent_offset": 0.00225}})          # 25 %: posed
+    offset = load_config(BASE, {"geometry": {"stent_offset": 0.00225}, "mesh": {"symmetry": "half"}})   # 25 %: posed
+    with pytest.raises(ConfigError, match=r"^config error: mesh.symmetry: geometry.stent_offset 0.00225 m breaks"):
+        load_config(BASE, {"geometry": {"stent_offset": 0.00225}})        # the study's own quarter runs
     assert unmakeable(offset, "3", "coarse", "quarter").startswith("geometry.stent_offset 0.00225 m breaks the x = 0")
     assert unmakeable(offset, "3", "coarse", "half") == unmakeable(offset, "1", "coarse", "quarter") == ""
     with pytest.raises(ConfigError, match=r"^config error: design_studies.s.grid.parameters.hole_pair_rotation\[1\]: "
@@ -596,7 +598,7 @@ def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     from ureterfsi.study.options import RunSpec
 
     cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml"]),
-                      {"geometry": {"stent_offset": 1e-3, "hole_arrangement": "rotated_90"}})
+                      {"geometry": {"stent_offset": 1e-3, "hole_arrangement": "rotated_90"}, "mesh": {"symmetry": "half"}})
     build_mesh(cfg, "3", "coarse", "half", tmp_path / "half.msh", tmp_path / "half.json")   # pairs on y, x
     mirror_mesh(tmp_path / "half.msh", tmp_path / "full.msh", "half")
     runs = {s: oneway.run(cfg, RunSpec("3", "coarse", s, str(tmp_path / f"{s}.msh"), end=0.04), str(tmp_path / f"{s}.nc"))

@@ -18,7 +18,9 @@ from ureterfsi import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
 from ureterfsi.designs import QUANTITIES, corner_run_paths, point_id, rung_check_dataset, studies, study_dataset
+from ureterfsi import metadata
 from ureterfsi.metadata import rung_check_metadata
+from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -176,10 +178,14 @@ def test_rung_check_options_and_refusals():
 def _fake_run(path: Path, peak: float, disp: float, wall_time: float = 1.0) -> None:
     """A run file with what point_scalars reads: an outlet flow peaking at `peak`, a wall displacement `disp`."""
     t = np.linspace(0.0, 0.04, 3)
-    xr.Dataset({"outlet_flux": ("time", peak * np.array([0.0, 1.0, 0.5])),
-                "max_wall_displacement": ("time", disp * np.array([0.0, 0.5, 1.0])),
-                "min_ale_jacobian": ("time", np.array([1.0, 0.9, 0.8]))},
-               coords={"time": ("time", t)}, attrs={"wall_time_s": wall_time, "config_hash": "x"}).to_netcdf(path)
+    ds = xr.Dataset({"outlet_flux": ("time", peak * np.array([0.0, 1.0, 0.5])),
+                     "max_wall_displacement": ("time", disp * np.array([0.0, 0.5, 1.0])),
+                     "min_ale_jacobian": ("time", np.array([1.0, 0.9, 0.8]))},
+                    coords={"time": ("time", t)}, attrs={"wall_time_s": wall_time, "config_hash": "x"})
+    # as the run writer marks it (the rung check reads run files through checked_io: format version and units)
+    metadata.annotate(ds)
+    ds.attrs[FORMAT_VERSION_ATTR] = FORMAT_VERSION
+    ds.to_netcdf(path)
 
 
 def _synthetic(tmp_path: Path, cfg: dict, rung_error):
@@ -378,3 +384,21 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
     text = ds.attrs["rung_check"]
     assert f"every corner solved within it; not checked (a solve failed) at {first}: (fully_coupled) failed" in text
     assert (ds["rung_trusted"].values == 0).all() and (ds["in_rung_check_region"].values == 1).all()
+
+
+def test_a_corrupt_corner_run_file_is_named_in_one_line(tmp_path):
+    """The rung check reads its corners' run files through checked_io: a truncated one is a BadFile naming it."""
+    from ureterfsi.checked_io import BadFile
+
+    cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
+    st = studies(cfg)["s"]
+    corners = {}
+    for c in st.check.corners:
+        corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
+        for path in corners[c.id]:
+            _fake_run(path, 1e-9, 1e-5)
+    bad = corners[st.check.corners[1].id][1]
+    bad.write_bytes(bad.read_bytes()[:300])
+    with pytest.raises(BadFile) as err:
+        rung_check_dataset(cfg, "s", corners)
+    assert str(err.value).startswith(f"{bad}: ") and "\n" not in str(err.value)

@@ -15,7 +15,9 @@ import yaml
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.designs import (SOBOL_INDICES, add_sobol_indices, saltelli_unit_sample, sobol_indices, studies,
                                study_dataset)
+from ureterfsi import metadata
 from ureterfsi.metadata import VARIABLES
+from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -103,10 +105,14 @@ def test_sobol_indices_of_the_ishigami_function():
 def _fake_run(path: Path, peak: float, disp: float) -> None:
     """A run file with what point_scalars and mesh_motion_variables read: an outlet flow peaking at `peak`, a wall displacement `disp`."""
     t = np.linspace(0.0, 0.02, 3)
-    xr.Dataset({"outlet_flux": ("time", peak * np.array([0.0, 1.0, 0.5])),
-                "max_wall_displacement": ("time", disp * np.array([0.0, 0.5, 1.0])),
-                "min_ale_jacobian": ("time", np.array([1.0, 0.9, 0.8]))},
-               coords={"time": ("time", t)}, attrs={"wall_time_s": 1.0, "config_hash": "x"}).to_netcdf(path)
+    ds = xr.Dataset({"outlet_flux": ("time", peak * np.array([0.0, 1.0, 0.5])),
+                     "max_wall_displacement": ("time", disp * np.array([0.0, 0.5, 1.0])),
+                     "min_ale_jacobian": ("time", np.array([1.0, 0.9, 0.8]))},
+                    coords={"time": ("time", t)}, attrs={"wall_time_s": 1.0, "config_hash": "x"})
+    # as the run writer marks it (study_dataset reads run files through checked_io: format version and units)
+    metadata.annotate(ds)
+    ds.attrs[FORMAT_VERSION_ATTR] = FORMAT_VERSION
+    ds.to_netcdf(path)
 
 
 def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):

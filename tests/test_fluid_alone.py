@@ -24,6 +24,7 @@ from dolfinx.fem import petsc as fem_petsc
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from _compare import assert_same_arithmetic
 from _engine_cases import FailingFactorisation
 from ureterfsi.fsi import (DirichletCondition, FluidRegion, MonolithicFSI, NewtonianFluid, OpenBoundary,
                            Scene, SolverOptions)
@@ -162,13 +163,16 @@ def test_prescribed_ale_map():
 
 
 def test_a_swapped_mesh_motion_is_the_one_a_scene_poses():
-    """use_mesh_motion (the one-way rung's auto fallback) leaves the problem a scene with that motion poses: bit for
-    bit the same run; a monolithic problem has no segregated motion to swap."""
+    """use_mesh_motion (the one-way rung's auto fallback) leaves the problem a scene with that motion poses: the
+    same run, the same arithmetic; a monolithic problem has no segregated motion to swap. Compared within 4 ulps
+    of each quantity's scale, not bit for bit (issue 14 item 5): two separate factorisations and solves of the same
+    systems agree bit for bit only while the BLAS under MUMPS reduces in the same order, which threaded OpenBLAS
+    on a loaded machine does not promise."""
     q_ext, _, pe = run(2e-3, 4, "segregated")
     q_swapped, _, ps = run(2e-3, 4, "segregated", bulged_map, swap_to=None)
     assert ps.mesh_motion_solver == pe.mesh_motion_solver == "lu"
-    assert np.array_equal(q_swapped, q_ext)
-    assert np.array_equal(ps.mesh_displacement.x.array, pe.mesh_displacement.x.array)
+    assert_same_arithmetic(q_swapped, q_ext, err_msg="outlet flux")
+    assert_same_arithmetic(ps.mesh_displacement.x.array, pe.mesh_displacement.x.array, err_msg="mesh displacement")
     with pytest.raises(ValueError, match="segregated"):
         run(2e-3, 0, "monolithic", swap_to=wall_displacement)
 

@@ -225,3 +225,190 @@ def test_snakemake_rule_log_gets_the_line(tmp_path, repo_root):
     text = (tmp_path / "fig04.log").read_text()
     assert f"{bad}: truncated or corrupt netCDF" in text and "Traceback" not in text, text
     assert f"rule fig04_outlet_flow: {bad}: truncated or corrupt netCDF" in proc.stderr
+
+
+# ------------------------------------------------------------------------------- holes found by the catalogue
+def test_mesh_of_another_model_or_symmetry(rz_mesh, tmp_path):
+    """The r-z mesh of model 1 handed to a 3D stented run (and back): one line naming the file, not a
+    ValueError from the operators deep in the solve."""
+    msh, _ = rz_mesh
+    with pytest.raises(BadFile) as err:
+        load_mesh(msh, MPI.COMM_WORLD, expect=("quarter", True, "model 2 (quarter)"))
+    _one_line(err, msh, "a 2D mesh without stent cells, but model 2 (quarter) needs a 3D mesh with stent cells")
+    mesh, _, _ = load_mesh(msh, MPI.COMM_WORLD, expect=("axisymmetric", False, "model 1 (axisymmetric)"))
+    assert mesh.geometry.dim == 2
+
+
+def test_solve_of_a_directory_or_another_models_mesh_is_one_line(rz_mesh, tmp_path, repo_root, capsys):
+    """A directory where the mesh should be (was: IsADirectoryError from hashing it for the checkpoint) and a
+    mesh of the wrong dimension (was: ValueError 'axisymmetric scenes need a 2D (r, z) mesh')."""
+    from ureterfsi.study.cli import main
+
+    msh, _ = rz_mesh
+    folder = tmp_path / "dir.msh"
+    folder.mkdir()
+    base = ["--config", str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml"),
+            "--level", "coarse", "--out", str(tmp_path / "out.nc"), "--checkpoint", str(tmp_path / "ck.npz")]
+    code = main(base + ["--model", "1", "--symmetry", "axisymmetric", "--mesh", str(folder)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1] == f"{folder}: is a directory, not a gmsh mesh", err
+    code = main(base + ["--model", "2", "--symmetry", "quarter", "--mesh", str(msh)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1].startswith(f"{msh}: a 2D mesh without stent cells, but model 2 (quarter)"), err
+    assert not (tmp_path / "out.nc").exists()
+
+
+def test_converted_units_are_refused(tmp_path, run_file, cfg):
+    """A run file whose flux was converted to ml/s, or whose time is in ms, is refused (was: aggregated silently,
+    a 10^6 error in every flux)."""
+    ds = xr.load_dataset(run_file, decode_times=False)
+    for var, units, what in (("outlet_flux", "ml/s", "variable 'outlet_flux' of a run file in units 'ml/s', "
+                                                     "expected 'm3 s-1'"),
+                             ("time", "ms since 2000-01-01", "variable 'time' of a run file in units 'ms since")):
+        bad = ds.copy()
+        bad[var] = bad[var] * 1e3
+        bad[var].attrs["units"] = units
+        p = tmp_path / f"{var}.nc"
+        bad.to_netcdf(p)
+        with pytest.raises(BadFile) as err:
+            aggregate.combine_models([p], cfg)
+        _one_line(err, p, what)
+
+
+def test_wall_motion_units(tmp_path):
+    from ureterfsi.checked_io import open_netcdf
+    from ureterfsi.metadata import WALL_MOTION_VARIABLES, write_netcdf, attach
+    from ureterfsi.provenance import FORMAT_VERSION
+    from ureterfsi.study.oneway import WALL_MOTION
+
+    names = [v for v in WALL_MOTION.variables if v not in ("time", "z_inner", "z_outer")]
+    ds = xr.Dataset({v: (("z_inner", "time"), np.zeros((2, 3))) for v in names},
+                    coords={"time": [0.0, 0.01, 0.02], "z_inner": [0.0, 1.0], "z_outer": [0.0, 1.0]})
+    attach(ds, WALL_MOTION_VARIABLES)
+    ds.attrs.update({FORMAT_VERSION_ATTR: FORMAT_VERSION, "wall_config_hash": "x"})
+    good = tmp_path / "good.nc"
+    write_netcdf(ds, good)
+    open_netcdf(good, WALL_MOTION)
+    ds["inner_radial_displacement"].attrs["units"] = "mm"
+    bad = tmp_path / "mm.nc"
+    write_netcdf(ds, bad)
+    with pytest.raises(BadFile) as err:
+        open_netcdf(bad, WALL_MOTION)
+    _one_line(err, bad, "variable 'inner_radial_displacement' of a wall-motion file in units 'mm', expected 'm'")
+
+
+def test_design_files_are_checked(tmp_path, run_file, cfg, repo_root, capsys):
+    """The design dataset rule read its runs with a bare xarray call (truncated run: OSError in an empty log)
+    and the design-figure rules their dataset so; both now go through checked_io and run_script."""
+    from ureterfsi.designs import study_dataset, studies
+
+    from ureterfsi.config import load_config
+
+    cfg = load_config(json.loads(json.dumps(cfg)), {"design_studies": {"s": {
+        "model": "2", "level": "coarse", "grid": {"parameters": {"peak_traction": [5e4]}}}}})
+    (point,) = studies(cfg)["s"].points
+    run_file.write_bytes(run_file.read_bytes()[:3000])
+    with pytest.raises(BadFile) as err:
+        study_dataset(cfg, "s", {point.id: run_file})
+    _one_line(err, run_file, "truncated or corrupt netCDF")
+    bare = tmp_path / "s.nc"
+    xr.Dataset({"x": ("t", np.zeros(3))}).to_netcdf(bare)
+    log = tmp_path / "fig.log"
+    smk = SimpleNamespace(rule="design_figures", input=[str(bare)], output=[str(tmp_path / "f.png")],
+                          params=SimpleNamespace(dpi=50), log=[str(log)], config={})
+    with pytest.raises(SystemExit) as ex:
+        runpy.run_path(str(repo_root / "workflow/scripts/design_figures.py"), init_globals={"snakemake": smk})
+    assert ex.value.code == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"rule design_figures: {bare}: design-study dataset without attribute") and "\n" not in err
+    assert f"{bare}: design-study dataset without attribute" in log.read_text()
+
+
+def test_corrupt_field_files_are_named(tmp_path):
+    """The field figures read fields.json, the XDMF index and the HDF5 snapshots with bare json/XML/netCDF4
+    calls: a truncated file ended in a JSONDecodeError/ParseError/OSError not naming it."""
+    from ureterfsi import plotting_fields
+
+    d = tmp_path / "model2_coarse"
+    d.mkdir()
+    (d / "fields.json").write_text('{"parts": {"domain": {"file": "domain.xd')
+    with pytest.raises(BadFile) as err:
+        plotting_fields.urine_fields(d)
+    _one_line(err, d / "fields.json", "not valid JSON")
+    (d / "domain.xdmf").write_text('<?xml version="1.0"?>\n<Xdmf Version="3.0"><Domain><Grid Name="x"')
+    with pytest.raises(BadFile) as err:
+        plotting_fields.read_fields(d, "domain")
+    _one_line(err, d / "domain.xdmf", "not valid XDMF")
+    h5 = d / "domain_s000001.h5"
+    xr.Dataset({"f": ("n", np.zeros(1000))}).to_netcdf(h5)
+    h5.write_bytes(h5.read_bytes()[:2000])
+    with pytest.raises(BadFile) as err:
+        plotting_fields._read(d, "domain_s000001.h5:/Function/f/0")
+    _one_line(err, h5, "truncated or corrupt field file")
+    with pytest.raises(BadFile) as err:
+        plotting_fields._read(d, "domain_s000002.h5:/Function/f/0")
+    _one_line(err, d / "domain_s000002.h5", "no such field file")
+
+
+def test_checkpoint_whose_field_snapshots_are_gone_is_not_resumed(tmp_path):
+    """A checkpoint resumed after its staged field snapshots were removed ended, after the last step, in a
+    FileNotFoundError traceback (fields.FieldWriter.finish indexes every snapshot): now it is not resumed."""
+    from ureterfsi.fields import FieldWriter
+
+    fw = FieldWriter(tmp_path / "model1_coarse", [SimpleNamespace(name="domain")], [0.02], 0, MPI.COMM_WORLD)
+    state = {"snapshots": [[1, 0.02]], "write_time": 0.1}
+    assert fw.cannot_resume(state).startswith(f"its field snapshots are gone ({fw.stage / 'domain_mesh.xdmf'}")
+    fw.stage.mkdir()
+    for name in ("domain_mesh.xdmf", "domain_s000001.xdmf"):
+        (fw.stage / name).write_text("<Xdmf/>")
+    assert fw.cannot_resume(state) == "" and fw.cannot_resume({"snapshots": [], "write_time": 0}) == ""
+
+
+def test_design_figures_of_a_stent_free_study():
+    """A design study of a stent-free model has no holes (dimension hole of size 0): its parameters figure
+    failed with 'cannot reshape array of size 0' (xarray cannot stack an empty dimension)."""
+    from ureterfsi.plotting_designs import parameters_figure
+
+    ds = xr.Dataset({"peak_outlet_flux": ("peak_traction", [1e-9, 2e-9]),
+                     "peak_hole_flux": (("peak_traction", "hole"), np.zeros((2, 0)))},
+                    coords={"peak_traction": [4e4, 5e4], "hole": np.zeros(0, dtype=int)})
+    for v in ds.variables:
+        ds[v].attrs["units"] = "1"
+    fig = parameters_figure(ds)
+    assert fig.axes
+
+
+def test_run_of_another_level_or_model_is_named(tmp_path, cfg):
+    """A run file of another mesh level among a level's runs (was: ValueError naming no file, traceback in the
+    log), and of another model among a convergence study's levels."""
+    a, b = tmp_path / "model1_coarse.nc", tmp_path / "model2_coarse.nc"
+    synthetic_run(cfg, "1", end=0.5).to_netcdf(a)
+    other = synthetic_run(cfg, "2", end=0.5)
+    other.attrs["mesh_level"] = "fine"
+    other.to_netcdf(b)
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_models([a, b], cfg)
+    _one_line(err, b, f"a run of mesh level 'fine', combined with level 'coarse' ({a})")
+    c = tmp_path / "model3_medium.nc"
+    third = synthetic_run(cfg, "3", end=0.5)
+    third.attrs["mesh_level"] = "medium"
+    third.to_netcdf(c)
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_levels([b, c], 0.5, cfg)
+    _one_line(err, c, f"a run of model 3, combined with model 2 ({b}): a convergence study is one model")
+
+
+def test_run_of_another_rung_in_a_runs_place_is_named(tmp_path, cfg):
+    """A one-way run copied into the fully coupled run's place (same model and level) was combined silently."""
+    p = tmp_path / "fully_coupled" / "model2_coarse.nc"
+    p.parent.mkdir()
+    run = synthetic_run(cfg, "2", end=0.5)
+    run.attrs.update(fidelity="one_way", symmetry="quarter")
+    run.to_netcdf(p)
+    expect = {str(p): {"model": "2", "mesh_level": "coarse", "fidelity": "fully_coupled", "symmetry": "quarter"}}
+    with pytest.raises(BadFile) as err:
+        aggregate.combine_models([p], cfg, expect=expect)
+    _one_line(err, p, "a run of model 2, mesh_level coarse, fidelity one_way, symmetry quarter, but this file is "
+                      "the run of model 2, mesh_level coarse, fidelity fully_coupled, symmetry quarter")
+    expect[str(p)]["fidelity"] = "one_way"
+    assert aggregate.combine_models([p], cfg, expect=expect).sizes["model"] == 1

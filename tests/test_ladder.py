@@ -20,7 +20,7 @@ SCALED = ("outlet_flux", "stent_max_von_mises", "stent_von_mises_line", "wall_ra
 def scaled(ds: xr.Dataset, eps: float) -> xr.Dataset:
     out = ds.copy(deep=True)
     for v in SCALED:
-        out[v] = out[v] * (1.0 + eps)
+        out[v] = (out[v] * (1.0 + eps)).assign_attrs(out[v].attrs)   # units kept, as the run writer has them
     return out
 
 

@@ -347,7 +347,9 @@ def test_rotated_pairs_mesh(mini, tmp_path, offset, symmetry):
     each hole is cut in half by the plane its axis lies in (its wall spans 0..a across); half y >= 0 with an offset
     stent: the y holes whole (+y side only), the x pair both sides, each cut by y = 0. The stent axis, measured from
     the stent's nodes, lies at the offset; the volumes match the analytic ones."""
-    cfg = load_config(mini, {"geometry": {"hole_arrangement": "rotated_90", "stent_offset": offset}})
+    # an offset stent: the study runs the half model (mesh.symmetry; a quarter study with an offset is refused)
+    cfg = load_config(mini, {"geometry": {"hole_arrangement": "rotated_90", "stent_offset": offset},
+                             "mesh": {"symmetry": symmetry}})
     geom = UreterGeometry.from_config(cfg)
     info = build_mesh(cfg, "2", "coarse", symmetry, tmp_path / "m.msh", tmp_path / "m.json")
     z, a = hole_pair_positions(geom, StentModel.from_config(cfg, "2")), geom.hole_radius
@@ -377,7 +379,7 @@ def test_rotated_pairs_mesh(mini, tmp_path, offset, symmetry):
 
 
 def test_offset_stent_quarter_refused(mini, tmp_path):
-    cfg = load_config(mini, {"geometry": {"stent_offset": 0.001}})
+    cfg = load_config(mini, {"geometry": {"stent_offset": 0.001}, "mesh": {"symmetry": "half"}})
     with pytest.raises(ValueError, match=r"^geometry.stent_offset: .*quarter"):
         build_mesh(cfg, "2", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
     assert not list(tmp_path.iterdir())

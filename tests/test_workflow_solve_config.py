@@ -50,3 +50,25 @@ def test_run_config_file_of_another_version_or_corrupt_is_named(tmp_path):
     (tmp_path / "list.json").write_text("[1, 2]")
     with pytest.raises(ConfigError, match=r"list\.json: must be a JSON object"):
         read_run_config(tmp_path / "list.json", model)
+
+
+@pytest.mark.parametrize("section,key,value,message", [
+    ("time", "dt", -1.0, "time.dt: must be > 0, got -1"),                        # ran backwards for ever
+    ("solver", "newton_max_iterations", 15.0, "solver.newton_max_iterations: must be an integer, got the float 15.0"),
+    ("peristalsis", "peak_traction", 50.0, "peristalsis.peak_traction: 50 Pa is outside the plausible range"),
+    ("time", "probe_times", [0.5, 9.0], "time.probe_times[1]: must lie in (0, time.end = 3] s, got 9"),
+])
+def test_hand_edited_run_config_file_is_validated(tmp_path, section, key, value, message):
+    """Issue 14: the run configuration file is validated like a configuration file (the schema of its sections
+    and the checks that read only them), not trusted: time.dt = -1 in it used to start a solve that stepped
+    backwards without end."""
+    from ureterfsi.config import read_run_config
+
+    cfg = load_config()
+    sections = json.loads(json.dumps(run_sections(cfg, "3")))
+    sections[section][key] = value
+    path = tmp_path / "model3.json"
+    path.write_text(json.dumps(sections))
+    with pytest.raises(ConfigError) as err:
+        read_run_config(path, "3")
+    assert str(err.value).startswith(f"config error: <run config> {path}: {message}"), err.value

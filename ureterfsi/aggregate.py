@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .checked_io import RUN_FILE, BadFile, Contract, open_netcdf
-from .metadata import annotate, at_time, cf_attrs, write_netcdf
+from .metadata import VARIABLES, annotate, at_time, cf_attrs, write_netcdf
 from .provenance import provenance_attrs
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
@@ -35,7 +35,7 @@ _SKIP_RUN_ATTRS = ("Conventions", "title")
 # what the readers of the study datasets (figures, ureterfsi.gci) rely on
 MODELS_DATASET = Contract("models dataset", attrs=("mesh_level", "models"),
                           variables=("model", "model_label", "time", "z", "probe_time", "outlet_flux",
-                                     "wall_radial_displacement", "outlet_hole_z"))
+                                     "wall_radial_displacement", "outlet_hole_z"), units=VARIABLES)
 CONVERGENCE_DATASET = Contract("mesh-convergence dataset", attrs=("model", "levels", "probe_time"),
                                variables=("level", "z", "stent_von_mises_line", "cells", "dofs",
                                           "peak_outlet_flux", "peak_stent_max_von_mises"))
@@ -83,11 +83,29 @@ def _clean_time(run: xr.Dataset) -> xr.Dataset:
     return run.isel(time=order[keep]).assign_coords(time=t_sorted[keep])
 
 
-def _runs_by(paths, attr: str) -> dict:
-    """Run files keyed by one attribute (model, mesh_level); a duplicate key or no file is an error."""
+def _source(run: xr.Dataset) -> str:
+    """The file a run was read from (checked_io.open_netcdf records it)."""
+    return str(run.encoding.get("source", "<run in memory>"))
+
+
+def check_identity(run: xr.Dataset, expect: dict) -> None:
+    """The run's attributes (model, mesh_level, fidelity, symmetry) are those `expect` names: a run file of
+    another model, level, rung or symmetry copied into a run's place is refused in one line naming it."""
+    got = {k: str(run.attrs.get(k)) for k in expect}
+    if got != {k: str(v) for k, v in expect.items()}:
+        def what(d):
+            return ", ".join(f"{k} {d[k]}" for k in expect)
+        raise BadFile(_source(run), f"a run of {what(got)}, but this file is the run of {what(expect)}")
+
+
+def _runs_by(paths, attr: str, expect: dict | None = None) -> dict:
+    """Run files keyed by one attribute (model, mesh_level); a duplicate key or no file is an error. `expect`:
+    {path: the attributes the run at that path must have} (check_identity)."""
     runs = {}
     for p in paths:
         run = open_run(p)
+        if expect and str(p) in expect:
+            check_identity(run, expect[str(p)])
         key = str(run.attrs[attr])
         if key in runs:
             raise BadFile(p, f"two runs with {attr} {key}: this one and {runs[key].encoding.get('source')}")
@@ -97,15 +115,19 @@ def _runs_by(paths, attr: str) -> dict:
     return runs
 
 
-def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> xr.Dataset:
+def combine_models(paths, cfg: dict | None = None, time_grid: str = "union", expect: dict | None = None) -> xr.Dataset:
     """Runs of one mesh level combined along `model` (see the module docstring).
 
     time_grid: "union" (every step time of every run) or "nominal" (0, dt, ..., end from cfg["time"]).
+    expect: {path: the attributes its run must have} (check_identity; rule aggregate_models passes them).
     """
-    runs = {m: _clean_time(run) for m, run in _runs_by(paths, "model").items()}
-    levels = {str(r.attrs["mesh_level"]) for r in runs.values()}
-    if len(levels) != 1:
-        raise ValueError(f"runs of different mesh levels cannot be combined along model: {sorted(levels)}")
+    runs = {m: _clean_time(run) for m, run in _runs_by(paths, "model", expect).items()}
+    first = next(iter(runs.values()))
+    for r in runs.values():   # a file of another level in this level's place is named
+        if str(r.attrs["mesh_level"]) != str(first.attrs["mesh_level"]):
+            raise BadFile(_source(r), f"a run of mesh level {r.attrs['mesh_level']!r}, combined with level "
+                                      f"{first.attrs['mesh_level']!r} ({_source(first)}): runs of different mesh "
+                                      f"levels cannot be combined along model")
     models = sorted(runs, key=lambda m: (len(m), m))
 
     if time_grid == "union":
@@ -128,7 +150,7 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
     z = ref["z"].values
     for m, r in runs.items():
         if r.sizes["z"] != z.size or not np.allclose(r["z"].values, z):
-            raise ValueError(f"run of model {m} has a different probe line z")
+            raise BadFile(_source(r), f"run of model {m} has a different probe line z than {_source(ref)}")
     stented = [m for m in models if "hole_offset" in runs[m].coords]
     hole_offset = runs[stented[0]]["hole_offset"].values if stented else None
     n_hole = max((runs[m].sizes.get("hole", 0) for m in models), default=0)
@@ -161,7 +183,7 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
             else:
                 sub = da.values.astype(float)
             if "hole_offset" in dims and not np.allclose(r["hole_offset"].values, hole_offset):
-                raise ValueError(f"run of model {m} has a different hole_offset grid")
+                raise BadFile(_source(r), f"run of model {m} has a different hole_offset grid")
             sl = tuple(slice(0, s) for s in sub.shape)
             arr[(i,) + sl] = sub
         data_vars[v] = (("model",) + dims, arr)
@@ -192,7 +214,7 @@ def combine_models(paths, cfg: dict | None = None, time_grid: str = "union") -> 
     for m in models:
         attrs.update(_run_attrs(m, runs[m].attrs))
         attrs[f"run_{m}_source"] = Path(runs[m].encoding["source"]).name
-    ds.attrs.update(provenance_attrs(cfg or {}, mesh_level=levels.pop(), models=",".join(models),
+    ds.attrs.update(provenance_attrs(cfg or {}, mesh_level=str(first.attrs["mesh_level"]), models=",".join(models),
                                      time_grid=time_grid, time_grid_description=grid_doc,
                                      time_interpolation="linear", **scene_attrs(cfg)))
     ds.attrs.update(attrs)
@@ -213,8 +235,8 @@ def _select_probe_time(run: xr.Dataset, time: float, name: str = "stent_von_mise
     pt = run["probe_time"].values.astype(float)
     i = int(np.argmin(np.abs(pt - time))) if pt.size else -1
     if i < 0 or abs(pt[i] - time) > 1e-6:
-        raise ValueError(f"run {run.attrs.get('model')}/{run.attrs.get('mesh_level')} has no probe at t = {time} s "
-                         f"(probe times {pt.tolist()})")
+        raise BadFile(_source(run), f"run {run.attrs.get('model')}/{run.attrs.get('mesh_level')} has no probe at "
+                                    f"t = {time} s (probe times {pt.tolist()})")
     return run[name].isel(probe_time=i)
 
 
@@ -223,7 +245,10 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
     runs = _runs_by(paths, "mesh_level")
     models = {str(r.attrs["model"]) for r in runs.values()}
     if len(models) != 1:
-        raise ValueError(f"a convergence study is one model on several meshes, got models {sorted(models)}")
+        first = next(iter(runs.values()))
+        odd = next(r for r in runs.values() if str(r.attrs["model"]) != str(first.attrs["model"]))
+        raise BadFile(_source(odd), f"a run of model {odd.attrs['model']}, combined with model {first.attrs['model']} "
+                                    f"({_source(first)}): a convergence study is one model on several meshes")
     order = list(cfg["mesh"]["levels"]) if cfg is not None else []
     levels = sorted(runs, key=lambda lv: (order.index(lv) if lv in order else len(order), lv))
     if "stent_von_mises_line" not in runs[levels[0]]:

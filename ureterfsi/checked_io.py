@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import netCDF4  # noqa: F401  (before xarray/dolfinx: see ureterfsi/__init__.py)
 import xarray as xr
 
+from .metadata import VARIABLES
 from .provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 _NETCDF_MAGIC = (b"\x89HDF\r\n\x1a\n", b"CDF\x01", b"CDF\x02", b"CDF\x05")
@@ -32,10 +33,14 @@ class BadFile(ValueError):
 
 @dataclass(frozen=True)
 class Contract:
-    """What a reader relies on in a file: its kind (for messages), attributes and variables."""
+    """What a reader relies on in a file: its kind (for messages), attributes and variables, and the table of
+    units its writer attaches (ureterfsi.metadata: name -> (units, long_name)); every variable of `variables`
+    that the table names must carry those units (a run file converted to ml/s or ms is refused)."""
     kind: str
     attrs: tuple = ()
     variables: tuple = ()
+    units: dict | None = field(default=None, hash=False, compare=False)
+    versioned: bool = True     # carries the file-format version (provenance_attrs); fields.json does not
 
 
 # what the readers of a mesh's JSON sidecar (ureterfsi.mesh.build_mesh) rely on
@@ -88,6 +93,13 @@ def open_netcdf(path, contract: Contract) -> xr.Dataset:
     for name in contract.variables:
         if name not in ds.variables:
             raise BadFile(path, f"missing variable '{name}' of a {contract.kind}")
+        if contract.units and name in contract.units:
+            # every time coordinate carries the CF units of VARIABLES["time"] (metadata.standard_names)
+            want = VARIABLES["time"][0] if name == "time" else contract.units[name][0]
+            got = ds[name].attrs.get("units")
+            if got != want:
+                raise BadFile(path, f"variable '{name}' of a {contract.kind} in units {got!r}, expected {want!r} "
+                                    f"(converted or written by another program?)")
     ds.encoding["source"] = str(path)
     return ds
 
@@ -104,7 +116,8 @@ def read_json(path, contract: Contract) -> dict:
         raise BadFile(path, f"not valid JSON (line {err.lineno} column {err.colno}: {err.msg}); truncated?") from None
     if not isinstance(data, dict):
         raise BadFile(path, f"a JSON {type(data).__name__}, expected the object of a {contract.kind}")
-    _check_version(path, data.get(FORMAT_VERSION_ATTR), contract.kind, data.get("version_ureterfsi"))
+    if contract.versioned:
+        _check_version(path, data.get(FORMAT_VERSION_ATTR), contract.kind, data.get("version_ureterfsi"))
     for key in contract.attrs:
         if key not in data:
             raise BadFile(path, f"missing key '{key}' of a {contract.kind}")
@@ -136,8 +149,9 @@ def gmsh_error(path, err: Exception) -> BadFile:
     return BadFile(path, f"gmsh cannot read this mesh ({err})")
 
 
-def sha256_file(path, chunk: int = 1 << 20) -> str:
-    """SHA-256 (hex) of a file's content."""
+def sha256_file(path, chunk: int = 1 << 20, kind: str = "file") -> str:
+    """SHA-256 (hex) of a file's content; BadFile if it is missing, a directory or empty."""
+    _check_exists(Path(path), kind)
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(chunk), b""):
@@ -150,4 +164,4 @@ def sha256_file(path, chunk: int = 1 << 20) -> str:
 RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity", "wall_time_s"),
                     variables=("time", "z", "probe_time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity",
                                "fluid_volume", "max_wall_displacement", "pulse_centre", "wall_radial_displacement",
-                               "step_time", "step_dt", "newton_iterations"))
+                               "step_time", "step_dt", "newton_iterations"), units=VARIABLES)

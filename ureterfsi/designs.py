@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from .checked_io import Contract, open_netcdf
 from .config.checks import check_config
 from .config.errors import ConfigError, fmt
 from .config.runs import wall_sections
@@ -609,9 +610,21 @@ def mesh_motion_variables(points, runs) -> dict:
             "min_ale_jacobian": (("design",), np.array([float(runs[p.id]["min_ale_jacobian"].min()) for p in points]))}
 
 
-def _load_run(path) -> xr.Dataset:
-    with xr.open_dataset(path, decode_times=False) as ds:
-        return ds.load()
+# what study_dataset (point_scalars, mesh_motion_variables) relies on in a point's run file (a run file,
+# checked_io.RUN_FILE, of which it reads these)
+DESIGN_RUN = Contract("run file", variables=("time", "outlet_flux", "max_wall_displacement", "min_ale_jacobian"),
+                      units=VARIABLES)
+# what the design figures (ureterfsi.plotting_designs, workflow/scripts/design_figures.py) rely on in a study's dataset
+DESIGN_DATASET = Contract("design-study dataset", attrs=("study", "design_kind", "model", "points"))
+# what study_dataset takes from a study's rung check (rung_check_dataset)
+RUNG_CHECK = Contract("rung check", attrs=("rung_check",),
+                      variables=("rung_error", "max_rung_error", "rung_tolerance", "corner_within_tolerance"))
+
+
+def _corner_run(path) -> xr.Dataset:
+    """A corner's run file: a run (DESIGN_RUN), or the record of a solve that failed (write_failed_corner)."""
+    ds = open_netcdf(path, Contract("corner run file"))
+    return ds if "solve_failed" in ds.attrs else open_netcdf(path, DESIGN_RUN)
 
 
 def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed: dict | None = None) -> str:
@@ -676,7 +689,7 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     error, wall = np.full((len(ch.corners), len(QUANTITIES)), np.nan), np.full((len(ch.corners), 2), np.nan)
     failed = {}
     for i, c in enumerate(ch.corners):
-        runs = [_load_run(path) for path in corner_paths[c.id]]
+        runs = [_corner_run(path) for path in corner_paths[c.id]]
         failed.update({c.id: r.attrs["solve_failed"] for r in runs if "solve_failed" in r.attrs})
         if c.id in failed:
             continue
@@ -740,7 +753,7 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
     (rung_check_dataset), whose variables and attributes it takes, with per point whether it lies in the checked
     region and whether it is trusted there (see the module docstring and ureterfsi.rung_check)."""
     st = studies(cfg)[name]
-    runs = {p.id: _load_run(paths[p.id]) for p in st.points}
+    runs = {p.id: open_netcdf(paths[p.id], DESIGN_RUN) for p in st.points}
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())

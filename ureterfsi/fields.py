@@ -196,6 +196,17 @@ class FieldWriter(Observer):
     def state(self) -> dict:
         return {"snapshots": self.snapshots, "write_time": self.write_time}
 
+    def cannot_resume(self, state: dict) -> str:
+        """The snapshots written before the checkpoint must still be staged (a resumed run writes only the later
+        ones, and finish() indexes them all)."""
+        need = [self.stage / f"{p.name}_mesh.xdmf" for p in self.parts] if state["snapshots"] else []
+        need += [self.stage / f"{p.name}_s{int(s):06d}.xdmf" for s, _ in state["snapshots"] for p in self.parts]
+        missing = [f for f in need if not f.exists()]
+        if missing:
+            return (f"its field snapshots are gone ({missing[0]}{f' and {len(missing) - 1} more' if len(missing) > 1 else ''}"
+                    f" missing)")
+        return ""
+
     def load_state(self, state: dict) -> None:
         self.snapshots = [(int(s), float(t)) for s, t in state["snapshots"]]
         self.write_time = float(state["write_time"])

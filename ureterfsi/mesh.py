@@ -469,8 +469,10 @@ def _write_msh(path) -> None:
             part.unlink(missing_ok=True)
 
 
-def load_mesh(msh_path, comm):
-    """(mesh, cell_tags, facet_tags) of a mesh written by build_mesh (gdim 2 for the r-z section).
+def load_mesh(msh_path, comm, expect: tuple | None = None):
+    """(mesh, cell_tags, facet_tags) of a mesh written by build_mesh (gdim 2 for the r-z section). With `expect`
+    = (symmetry, stent, what): the mesh must be of that symmetry's dimension (2 for axisymmetric, else 3) and
+    have stent cells exactly if `stent`, else BadFile naming `what` (the run it was handed to).
 
     dolfinx 0.5.2's gmshio.read_from_msh is broken (finalizes gmsh before building the mesh), so the
     file is merged here on rank 0 and handed to gmshio.model_to_mesh on every rank.
@@ -493,6 +495,15 @@ def load_mesh(msh_path, comm):
             if cell_dim not in (2, 3) or not cell_tags <= set(tags.CELL_NAMES) or tags.FLUID not in cell_tags:
                 raise BadFile(msh_path, f"not a ureterfsi mesh (physical groups {sorted(groups)}; expected cells "
                                         f"tagged {sorted(tags.CELL_NAMES)} with fluid {tags.FLUID})")
+            if expect is not None:
+                symmetry, stent, what = expect
+                want_dim, has_stent = 2 if symmetry == "axisymmetric" else 3, tags.STENT in cell_tags
+                if cell_dim != want_dim or has_stent != bool(stent):
+                    def kind(d, s):
+                        return f"a {d}D mesh {'with' if s else 'without'} stent cells"
+                    raise BadFile(msh_path, f"{kind(cell_dim, has_stent)}, but {what} needs "
+                                            f"{kind(want_dim, bool(stent))} (the mesh of another model or symmetry?); "
+                                            f"re-run the rule that makes it")
             gdim = cell_dim
         except BadFile as err:
             bad = err

@@ -24,7 +24,8 @@ def _flat(ds: xr.Dataset) -> xr.Dataset:
     """One `point` dimension whatever the layout (grid dimensions stacked)."""
     if "design" in ds.dims:
         return ds.rename({"design": "point"})
-    return ds.stack(point=_parameters(ds))
+    # xarray cannot stack a variable with an empty dimension (hole: 0 in a study of a stent-free model)
+    return ds.drop_dims([d for d, n in ds.sizes.items() if n == 0]).stack(point=_parameters(ds))
 
 
 def parameters_figure(ds: xr.Dataset):

@@ -5,7 +5,6 @@ is imported by the two figure functions only: reading and sampling fields need n
 """
 from __future__ import annotations
 
-import json
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,17 +14,29 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from . import tags
+from .checked_io import BadFile, Contract, read_json
+
+# the index of a run's field files (ureterfsi.fields) as the readers here use it
+FIELDS_INDEX = Contract("field-files index", attrs=("parts", "units"), versioned=False)
 
 
 def _read(directory: Path, item: str) -> np.ndarray:
     """Array of an XDMF HDF DataItem text 'file.h5:/group/.../name'."""
     fname, path = item.strip().split(":", 1)
     *groups, name = path.strip("/").split("/")
-    with netCDF4.Dataset(directory / fname) as ds:
-        node = ds
-        for g in groups:
-            node = node.groups[g]
-        return np.asarray(node.variables[name][:])
+    h5 = directory / fname
+    if not h5.is_file():
+        raise BadFile(h5, "no such field file (listed in the XDMF index)")
+    try:
+        with netCDF4.Dataset(h5) as ds:
+            node = ds
+            for g in groups:
+                node = node.groups[g]
+            return np.asarray(node.variables[name][:])
+    except KeyError:
+        raise BadFile(h5, f"field file without the data set {path} its XDMF index lists") from None
+    except Exception as err:  # netCDF4/HDF5: OSError, RuntimeError on a truncated or foreign file
+        raise BadFile(h5, f"truncated or corrupt field file ({type(err).__name__}: {err})") from None
 
 
 @dataclass
@@ -55,14 +66,19 @@ def read_fields(directory, part: str) -> FieldSet:
     directory = Path(directory)
     index = directory / f"{part}.xdmf"
     if not index.exists():
-        raise FileNotFoundError(f"{index}: no field file of part {part!r}")
-    root = ET.parse(index).getroot()
+        raise BadFile(index, f"no field file of part {part!r}")
+    try:
+        root = ET.parse(index).getroot()
+    except ET.ParseError as err:
+        raise BadFile(index, f"not valid XDMF (XML: {err}); truncated?") from None
     grids = [g for g in root.iter("Grid") if g.get("GridType") == "Uniform"]
+    if not grids:
+        raise BadFile(index, "XDMF index without snapshots (no Uniform grid)")
     topo = _read(directory, grids[0].find("Topology/DataItem").text)
     geom = _read(directory, grids[0].find("Geometry/DataItem").text)
     times = np.array([float(g.find("Time").get("Value")) for g in grids])
     items = [{a.get("Name"): a.find("DataItem").text for a in g.findall("Attribute")} for g in grids]
-    units = json.loads((directory / "fields.json").read_text())["units"]
+    units = read_json(directory / "fields.json", FIELDS_INDEX)["units"]
     return FieldSet(directory, geom, topo.astype(np.int64), times, items, units)
 
 
@@ -77,7 +93,7 @@ def _inv3(A: np.ndarray) -> np.ndarray:
 
 def urine_fields(directory) -> FieldSet:
     """The part of a run's field output that holds the urine: `domain` (fully coupled) or `urine` (one-way)."""
-    parts = json.loads((Path(directory) / "fields.json").read_text())["parts"]
+    parts = read_json(Path(directory) / "fields.json", FIELDS_INDEX)["parts"]
     name = next((p for p in ("domain", "urine") if p in parts), None)
     if name is None:
         raise KeyError(f"{directory}/fields.json: no part with the urine (domain or urine), has {sorted(parts)}")

@@ -408,6 +408,23 @@ CHECKS = (
 )
 
 
+# the checks that read only the sections of one solve (runs.RUN_SECTIONS and `models`, holding the run's model)
+RUN_CHECKS = (
+    check_plausible,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_stent_offset,
+    check_models, check_time, check_mesh_sizes, check_levels, check_resolution, check_fluid_bulk, check_peristalsis,
+    check_ureter_material,
+)
+
+
+def check_run_config(cfg, sections: tuple) -> None:
+    """Validate the configuration of one solve (runs.run_config: `sections`, `models` holding the run's model):
+    the schema of those sections, then RUN_CHECKS; raise ConfigError on the first violation."""
+    validate_schema(cfg, sections)
+    for check in RUN_CHECKS:
+        check(cfg)
+
+
 def check_config(cfg) -> None:
     """Validate one configuration, its design studies aside (as each design point is validated): the schema,
     then CHECKS in order; raise ConfigError on the first violation.

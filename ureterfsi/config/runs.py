@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+from .checks import check_run_config
 from .errors import ConfigError, fmt
 from .schema import schema_defaults
 
@@ -42,7 +43,8 @@ def run_sections(cfg: dict, model: str) -> dict:
 
 def run_config(sections: dict, model: str) -> dict:
     """The configuration of one solve from what run_sections(cfg, model) returned (rule solve's config file):
-    those sections, `models` holding the run's model alone."""
+    those sections, `models` holding the run's model alone, validated (checks.check_run_config: a file edited by
+    hand is refused like a configuration file)."""
     want = set(RUN_SECTIONS) | {"model"}
     if set(sections) != want:
         raise ConfigError("<run config>", f"must hold exactly the sections {sorted(want)}, got {sorted(sections)}")
@@ -51,7 +53,9 @@ def run_config(sections: dict, model: str) -> dict:
         if missing:
             raise ConfigError(f"<run config> {name}.{missing[0]}", "missing: the file was written by another version "
                               "of ureterfsi (re-run rule solve_config)")
-    return {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+    cfg = {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+    check_run_config(cfg, RUN_SECTIONS + ("models",))
+    return cfg
 
 
 def read_run_config(path, model: str) -> dict:

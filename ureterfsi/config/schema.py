@@ -117,29 +117,41 @@ def _schema_message(err) -> tuple[str, str]:
     return dotted(path), err.message
 
 
-@lru_cache(maxsize=1)
-def _validator():
-    """Draft 2020-12 validator of the schema whose ``integer`` excludes floats (JSON Schema accepts 15.0)."""
+@lru_cache(maxsize=None)
+def _section_schema(sections: tuple | None) -> dict:
+    """The schema, or with `sections` the schema of a mapping of exactly those top-level sections (the same
+    definitions: the configuration file of one solve holds only the sections it reads, runs.run_config)."""
+    root = load_schema()
+    if sections is None:
+        return root
+    return {**root, "properties": {k: root["properties"][k] for k in sections}, "required": list(sections)}
+
+
+@lru_cache(maxsize=None)
+def _validator(sections: tuple | None = None):
+    """Draft 2020-12 validator of the schema (of `sections`, _section_schema) whose ``integer`` excludes floats
+    (JSON Schema accepts 15.0)."""
     checker = Draft202012Validator.TYPE_CHECKER.redefine(
         "integer", lambda _, inst: isinstance(inst, int) and not isinstance(inst, bool))
-    return validators.extend(Draft202012Validator, type_checker=checker)(load_schema())
+    return validators.extend(Draft202012Validator, type_checker=checker)(_section_schema(sections))
 
 
-def _validate_schema(cfg: dict) -> None:
-    errors = [_schema_message(e) for e in _validator().iter_errors(cfg)]
+def _validate_schema(cfg: dict, sections: tuple | None = None) -> None:
+    errors = [_schema_message(e) for e in _validator(sections).iter_errors(cfg)]
     if errors:
         key, text = min(errors, key=lambda kt: (kt[0].split("."), kt[1]))
         raise ConfigError(key, text)
 
 
-def validate_schema(cfg: dict) -> None:
+def validate_schema(cfg: dict, sections: tuple | None = None) -> None:
     """Normalise `cfg` in place (YAML 1.2 number strings where the schema expects a number become floats, see
     _YAML12_FLOAT; missing optional keys get their schema defaults) and raise ConfigError on the first schema
-    violation by dotted key."""
-    _coerce_numbers(cfg, load_schema(), load_schema())
+    violation by dotted key. With `sections`: `cfg` holds exactly those top-level sections."""
+    schema = _section_schema(sections)
+    _coerce_numbers(cfg, schema, schema)
     _prescan(cfg)
-    _fill_defaults(cfg, load_schema())
-    _validate_schema(cfg)
+    _fill_defaults(cfg, schema)
+    _validate_schema(cfg, sections)
 
 
 def schema_defaults(section: str) -> dict:

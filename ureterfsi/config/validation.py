@@ -7,15 +7,29 @@ from .. import designs
 from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml
+from .runs import unmakeable
 from .schema import REPO_ROOT
 
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
 
+def check_study_runs_makeable(cfg: dict) -> None:
+    """Every study run (each model at study.level in its symmetry: study.runs, else mesh.symmetry) can be made
+    (runs.unmakeable, the rule the dry run applies to a target): a configuration whose own runs cannot be made is
+    refused by `config check` too, not only when Snakemake plans them. Not part of check_config: a design point
+    takes its symmetry from its own geometry (designs.point_symmetry), not from mesh.symmetry."""
+    for model in sorted(cfg["models"], key=int):
+        over = cfg["study"]["runs"].get(model, {})
+        why = unmakeable(cfg, model, cfg["study"]["level"], over.get("symmetry", cfg["mesh"]["symmetry"]))
+        if why:
+            raise ConfigError(f"study.runs.{model}.symmetry" if "symmetry" in over else "mesh.symmetry", why)
+
+
 def validate_config(cfg: dict) -> None:
-    """Validate `cfg` (schema, then CHECKS: checks.check_config; then its design studies); raise ConfigError on
-    the first violation."""
+    """Validate `cfg` (schema, then CHECKS: checks.check_config; then that its study runs can be made; then its
+    design studies); raise ConfigError on the first violation."""
     check_config(cfg)
+    check_study_runs_makeable(cfg)
     designs.check_design_studies(cfg)
 
 

@@ -102,6 +102,11 @@ class Observer(abc.ABC):
     def load_state(self, state: dict) -> None:
         pass
 
+    def cannot_resume(self, state: dict) -> str:
+        """Why a checkpoint holding `state` (from state()) cannot be resumed by this observer, '' if it can
+        (e.g. files it wrote before the checkpoint are gone)."""
+        return ""
+
 
 @dataclass
 class StepRecord:
@@ -195,6 +200,10 @@ class TimeIntegrator:
             return None, "written with another mesh partition (its process-local arrays cannot be restored)"
         if len(meta["observers"]) != len(self.observers):
             return None, f"holds {len(meta['observers'])} observer records, this run has {len(self.observers)} observers"
+        for obs, st in zip(self.observers, meta["observers"]):
+            why = obs.cannot_resume(st)
+            if why:
+                return None, why
         return (data, meta), None
 
     def _resumable(self):

@@ -66,7 +66,7 @@ log = logging.getLogger("ureterfsi.study.oneway")
 WALL_MOTION = Contract("wall-motion file", attrs=("wall_config_hash",),
                        variables=("time", "z_inner", "z_outer", "inner_radial_displacement",
                                   "inner_axial_displacement", "inner_radial_velocity", "inner_axial_velocity",
-                                  "outer_radial_displacement"))
+                                  "outer_radial_displacement"), units=WALL_MOTION_VARIABLES)
 
 @dataclass
 class WallHistory:

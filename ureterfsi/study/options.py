@@ -79,8 +79,8 @@ def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float,
     _flatten("", sections, out)
     out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,
                 "run.fidelity": fidelity, "run.end": repr(float(end)), "run.dt": repr(float(dt)),
-                "mesh_sha256": sha256_file(spec.mesh_path),
+                "mesh_sha256": sha256_file(spec.mesh_path, kind="gmsh mesh"),
                 "version.ureterfsi": __version__, "version.dolfinx": dolfinx.__version__})
     if wall_path:
-        out["wall_motion_sha256"] = sha256_file(wall_path)
+        out["wall_motion_sha256"] = sha256_file(wall_path, kind="wall-motion file")
     return out

@@ -63,8 +63,10 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
     and probes on the run's mesh; the probe dataset is written atomically (rank 0) to `out_path`."""
     wall0 = _time.perf_counter()
     comm = MPI.COMM_WORLD
+    # the mesh first: a file that is not this run's mesh is named before anything hashes it (time_settings)
+    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm, expect=(
+        spec.symmetry, cfg["models"][spec.model]["stent"], f"model {spec.model} ({spec.symmetry})"))
     settings = time_settings(cfg, spec, checkpoint_path, fidelity, wall_path)
-    mesh, cell_tags, facet_tags = load_mesh(spec.mesh_path, comm)
     posed = pose(settings, mesh, cell_tags, facet_tags)
     pb, obs = posed.problem, posed.probes
     ndofs = pb.W.dofmap.index_map.size_global * pb.W.dofmap.index_map_bs

@@ -15,6 +15,16 @@ rule aggregate_models:
         # rerun triggers: the Table 1 labels stored in the dataset and the time-grid choice
         labels={m: config["models"][m]["label"] for m in MODELS},
         time_grid="union",
+        # what each run file must be (a file of another model, level, rung or symmetry is refused)
+        expect=lambda w: {
+            run_file(m, w.level): {
+                "model": m,
+                "mesh_level": w.level,
+                "fidelity": run_fidelity(m),
+                "symmetry": run_symmetry(m),
+            }
+            for m in MODELS
+        },
     script:
         "../scripts/aggregate_models.py"
 

@@ -9,7 +9,7 @@ smk = snakemake  # noqa: F821
 
 
 def main():
-    ds = combine_models(list(smk.input.runs), smk.config, time_grid=smk.params.time_grid)
+    ds = combine_models(list(smk.input.runs), smk.config, time_grid=smk.params.time_grid, expect=smk.params.expect)
     write_dataset(ds, smk.output[0])
     logging.info("models %s, %d times (%s), %d probe times -> %s", list(ds["model"].values), ds.sizes["time"],
                  ds.attrs["time_grid"], ds.sizes["probe_time"], smk.output[0])

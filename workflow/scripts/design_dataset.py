@@ -3,17 +3,22 @@
 import logging
 from pathlib import Path
 
-import xarray as xr
-
 from ureterfsi.aggregate import write_dataset
-from ureterfsi.designs import study_dataset
+from ureterfsi.checked_io import open_netcdf
+from ureterfsi.designs import RUNG_CHECK, study_dataset
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO)  # noqa: F821
-name = snakemake.wildcards.design_study  # noqa: F821
-paths = {Path(p).parent.name: p for p in snakemake.input.runs}  # noqa: F821
-checked = "check" in snakemake.input.keys()  # noqa: F821
-check = xr.load_dataset(snakemake.input.check, decode_times=False) if checked else None  # noqa: F821
-ds = study_dataset(snakemake.config, name, paths, check)  # noqa: F821
-write_dataset(ds, snakemake.output[0])  # noqa: F821
-logging.info("design study %s: %d points -> %s; rung check: %s", name, len(paths), snakemake.output[0],  # noqa: F821
-             ds.attrs["rung_check"])
+smk = snakemake  # noqa: F821
+
+
+def main():
+    name = smk.wildcards.design_study
+    paths = {Path(p).parent.name: p for p in smk.input.runs}
+    check = open_netcdf(smk.input.check, RUNG_CHECK) if "check" in smk.input.keys() else None
+    ds = study_dataset(smk.config, name, paths, check)
+    write_dataset(ds, smk.output[0])
+    logging.info("design study %s: %d points -> %s; rung check: %s", name, len(paths), smk.output[0],
+                 ds.attrs["rung_check"])
+
+
+run_script(smk, main)

@@ -3,14 +3,16 @@ import logging
 
 from ureterfsi.designs import mesh_request
 from ureterfsi.mesh import build_mesh
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO,  # noqa: F821
-                    format="%(asctime)s %(levelname)s %(message)s")
-cfg, model, level, symmetry = mesh_request(snakemake.config, snakemake.wildcards.mesh_id)  # noqa: F821
-try:
-    info = build_mesh(cfg, model, level, symmetry, snakemake.output.msh, snakemake.output.json)  # noqa: F821
-except Exception:
-    logging.exception("mesh generation failed")
-    raise
-logging.info("design mesh %s: model %s, %s, %s: %d cells, %.1f s", snakemake.wildcards.mesh_id, model, level,  # noqa: F821
-             symmetry, info["cells_total"], info["mesh_wall_time_s"])
+smk = snakemake  # noqa: F821
+
+
+def main():
+    cfg, model, level, symmetry = mesh_request(smk.config, smk.wildcards.mesh_id)
+    info = build_mesh(cfg, model, level, symmetry, smk.output.msh, smk.output.json)
+    logging.info("design mesh %s: model %s, %s, %s: %d cells, %.1f s", smk.wildcards.mesh_id, model, level,
+                 symmetry, info["cells_total"], info["mesh_wall_time_s"])
+
+
+run_script(smk, main)

@@ -4,9 +4,16 @@ import logging
 
 from ureterfsi.aggregate import write_dataset
 from ureterfsi.designs import corner_run_paths, rung_check_dataset, studies
+from ureterfsi.workflow_log import run_script
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO)  # noqa: F821
-name = snakemake.wildcards.design_study  # noqa: F821
-ds = rung_check_dataset(snakemake.config, name, corner_run_paths(studies(snakemake.config)[name]))  # noqa: F821
-write_dataset(ds, snakemake.output[0])  # noqa: F821
-logging.info("design study %s: rung check -> %s: %s", name, snakemake.output[0], ds.attrs["rung_check"])  # noqa: F821
+smk = snakemake  # noqa: F821
+
+
+def main():
+    name = smk.wildcards.design_study
+    ds = rung_check_dataset(smk.config, name, corner_run_paths(studies(smk.config)[name]))
+    write_dataset(ds, smk.output[0])
+    logging.info("design study %s: rung check -> %s: %s", name, smk.output[0], ds.attrs["rung_check"])
+
+
+run_script(smk, main)

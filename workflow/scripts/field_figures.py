@@ -1,6 +1,7 @@
 """Snakemake script of the field-figure rules (workflow/rules/fields.smk): figures drawn from a run's field
 files (ureterfsi.plotting_fields), chosen by the rule name, written atomically in every configured format."""
 import logging
+import os
 from pathlib import Path
 
 from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
@@ -14,7 +15,8 @@ smk = snakemake  # noqa: F821
 
 def draw(rule: str):
     run = open_netcdf(smk.input.run, RUN_FILE)
-    fs = plotting_fields.urine_fields(Path(smk.input.run).parent / run.attrs["fields_path"])
+    # the field directory as a clean path (messages name its files): fields_path is relative to the run file
+    fs = plotting_fields.urine_fields(Path(os.path.normpath(Path(smk.input.run).parent / run.attrs["fields_path"])))
     geom = UreterGeometry.from_config(smk.config)
     model = smk.config["models"][str(run.attrs["model"])]
     what = (f"model {run.attrs['model']} ({model['label']} between hole pairs), {run.attrs['fidelity']}, "
