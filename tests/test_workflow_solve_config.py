@@ -5,17 +5,21 @@ import json
 
 import pytest
 
-from ureterfsi.config import RUN_SECTIONS, ConfigError, load_config, run_config, run_sections
+from ureterfsi.config import RUN_SECTIONS, ConfigError, load_config, read_run_config, run_config, run_sections
+from ureterfsi.provenance import write_json
 
 
-def test_run_config_round_trip():
+def test_run_config_round_trip(tmp_path):
+    """Written as rule solve_config writes it (provenance.write_json: keys sorted, so the mesh levels come out
+    coarse, fine, medium) and read as the solve reads it: the same sections, the levels coarse to fine again."""
     cfg = load_config()
     model = sorted(cfg["models"])[1]
-    sections = json.loads(json.dumps(run_sections(cfg, model)))      # as rule solve_config writes it
-    back = run_config(sections, model)
+    write_json(tmp_path / "run.json", run_sections(cfg, model))
+    back = read_run_config(tmp_path / "run.json", model)
     assert set(back) == set(RUN_SECTIONS) | {"models"} and back["models"] == {model: cfg["models"][model]}
     assert all(back[k] == cfg[k] for k in RUN_SECTIONS)
-    assert run_sections(back, model) == sections
+    assert list(back["mesh"]["levels"]) == list(cfg["mesh"]["levels"]) == ["coarse", "medium", "fine"]
+    assert run_sections(back, model) == json.loads(json.dumps(run_sections(cfg, model)))
 
 
 def test_run_config_refuses_other_sections():

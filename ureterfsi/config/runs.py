@@ -54,6 +54,12 @@ def run_config(sections: dict, model: str) -> dict:
             raise ConfigError(f"<run config> {name}.{missing[0]}", "missing: the file was written by another version "
                               "of ureterfsi (re-run rule solve_config)")
     cfg = {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+    levels = cfg["mesh"].get("levels") if isinstance(cfg["mesh"], dict) else None
+    if isinstance(levels, dict) and all(isinstance(lv, dict) and isinstance(lv.get("size_factor"), (int, float))
+                                        for lv in levels.values()):
+        # a JSON object has no order (provenance.write_json sorts its keys): the levels, coarse to fine in the
+        # configuration, back in that order
+        cfg["mesh"] = cfg["mesh"] | {"levels": dict(sorted(levels.items(), key=lambda kv: -kv[1]["size_factor"]))}
     check_run_config(cfg, RUN_SECTIONS + ("models",))
     return cfg
 
