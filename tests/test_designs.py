@@ -120,13 +120,19 @@ def test_dry_run_of_a_100_point_study(tmp_path):
 
 
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
-    """Every output of study `name` as an empty file, in job order (then `snakemake --touch` records them as
-    made by their jobs)."""
+    """Every output of study `name` (points and, with a rung check, corners) as an empty file, in job order (then
+    `snakemake --touch` records them as made by their jobs)."""
+    from ureterfsi.designs import corner_run_paths, design_figure_kinds
+
     st = studies(load_config(copy.deepcopy(cfg)))[name]
-    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in st.points for e in ("msh", "json")]
-              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in st.points],
-              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points], [f"results/designs/{name}.nc"],
-              [f"results/figures/designs/{name}_parameters.{e}" for e in cfg["figures"]["formats"]]]
+    every = st.points + (st.check.corners if st.check else [])
+    runs = [f for pair in corner_run_paths(st).values() for f in pair] if st.check else []
+    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in every for e in ("msh", "json")]
+              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in every],
+              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs,
+              [f"results/designs/{name}/rung_check.nc"] if st.check else [], [f"results/designs/{name}.nc"],
+              [f"results/figures/designs/{name}_{k}.{e}" for k in design_figure_kinds(st)
+               for e in cfg["figures"]["formats"]]]
     for i, stage in enumerate(stages):
         for f in stage:
             (work / f).parent.mkdir(parents=True, exist_ok=True)

@@ -6,7 +6,6 @@ from __future__ import annotations
 import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import copy
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -312,32 +311,11 @@ def test_shipped_studies_are_checked():
         assert len(st.check.reuses) == reuse[name], (name, st.check.reuses)
 
 
-def _pretend_done(work: Path, cfg: dict, name: str) -> None:
-    """Every output of study `name` (points and corners) as an empty file, in job order (then `snakemake --touch`
-    records them as made by their jobs)."""
-    from ureterfsi.designs import design_figure_kinds
-
-    st = studies(load_config(copy.deepcopy(cfg)))[name]
-    every = st.points + st.check.corners
-    runs = [f for pair in corner_run_paths(st).values() for f in pair]
-    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in every for e in ("msh", "json")]
-              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in every],
-              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs,
-              [f"results/designs/{name}/rung_check.nc"], [f"results/designs/{name}.nc"],
-              [f"results/figures/designs/{name}_{k}.{e}" for k in design_figure_kinds(st)
-               for e in cfg["figures"]["formats"]]]
-    for i, stage in enumerate(stages):
-        for f in stage:
-            (work / f).parent.mkdir(parents=True, exist_ok=True)
-            (work / f).touch()
-            os.utime(work / f, (1e9 + i, 1e9 + i))
-
-
 def test_only_a_moved_corner_reruns(tmp_path):
     """Corners are content-addressed like the points: an interior point's change re-runs that point alone; moving
     the design space's maximum hole diameter re-runs the two corners there (their mesh, both their solves) besides
     the moved points."""
-    from test_designs import _dry
+    from test_designs import _dry, _pretend_done
     from test_workflow_e2e import ok, snakemake
 
     cfg = copy.deepcopy(BASE)
