@@ -269,3 +269,50 @@ def test_without_a_contraction_the_stop_is_newtons_residual_test():
     pb.x.x.scatter_forward()
     assert part.converged(xs, gs, r0, history=[]) == (False, True)
     assert part.error_bound(xs, [x, x]) == 0.0                          # a fixed point: nothing left to bound
+
+
+def test_a_residual_within_the_absolute_tolerance_does_not_make_a_factor_stale():
+    """A block whose update left round-off (on the 50 mm ureter ~5e-14 -> ~4e-14) is not stale, whatever the ratio;
+    above newton_atol the contraction decides."""
+    from ureterfsi.fsi.partitioned import stale_factor
+
+    o = SolverOptions(newton_atol=1e-10, block_reuse_contraction=0.5)
+    assert not stale_factor(4.1e-14, 5.3e-14, o)
+    assert not stale_factor(1e-10, 1e-10, o)
+    assert stale_factor(3e-10, 5e-10, o) and stale_factor(2e-3, 3e-3, o)
+    assert not stale_factor(1e-3, 3e-3, o) and not stale_factor(1.0, None, o)
+
+
+def test_the_refresh_schedule_buys_the_wall_lu_once_the_extra_sweeps_cost_as_much():
+    """Rent or buy (block_refresh_sweeps): the sweeps beyond a fresh step's are summed; at the limit the wall's LU is
+    due, the urine's with it only when no step since the wall's refresh came down to the floor; 0 switches it off.
+    The sequences are the 50 mm ureter's (docs/performance.md)."""
+    from ureterfsi.fsi.partitioned import RefreshSchedule
+
+    s = RefreshSchedule(limit=4)
+    assert [s.converged(n) for n in (2, 2, 3, 3)] == [(), (), (), ()]
+    assert s.converged(4) == ("solid",)              # 0 + 0 + 1 + 1 + 2 extra sweeps
+    s.wall_refreshed()
+    assert [s.converged(n) for n in (3, 3, 3)] == [(), (), ()]
+    assert s.converged(3) == ("solid", "flow")       # no step came down to 2: the urine's LU is stale too
+    s.wall_refreshed()
+    assert s.converged(3) == () and s.floor == 3     # the step after both refreshes sets the floor anew
+    s.reset()
+    assert s.floor is None and s.extra == 0
+    off = RefreshSchedule(limit=0)
+    assert all(off.converged(n) == () for n in (2, 9, 9, 9))
+
+
+def test_lus_due_on_schedule_are_refreshed_at_the_next_step_and_keep_the_solution(reference_8_steps, monkeypatch):
+    """The tube's sweeps do not grow with its LUs' age (its coupling sets them), so the schedule is forced: with both
+    LUs due after every step each step refactorises both once, and the solution is the same."""
+    from ureterfsi.fsi.partitioned import RefreshSchedule
+
+    plain, _ = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, steps=8, **TOL)
+    monkeypatch.setattr(RefreshSchedule, "converged", lambda self, sweeps: ("solid", "flow"))
+    pb, _ = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, steps=8, **TOL)
+    assert max(field_errors(pb, reference_8_steps).values()) <= 1e-6
+    c, p = pb.counters, plain.counters
+    assert c["scheduled_refreshes"] == 9, c                       # the steady solve and 8 steps
+    assert c["solid_factorisations"] >= 9 > p["solid_factorisations"], (c, p)
+    assert c["flow_factorisations"] >= 9 > p["flow_factorisations"], (c, p)

@@ -18,7 +18,8 @@ x* = G(x*) the step's solution, G one sweep, rho its contraction (the largest se
 in the max norm relative to each field (where rho >= 1, so that only Anderson's mixing converges the sweeps, by the
 residual test below); or ("residual") when the residual test of Newton holds and no field changed over the last
 sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is kept across iterations and steps
-and refreshed when its iteration contracts by less than block_reuse_contraction: A_SS from the whole Jacobian, A_MM the
+and refreshed when its iteration contracts by less than block_reuse_contraction or when the sweeps a stale LU costs
+outweigh a refresh (block_refresh_sweeps, RefreshSchedule): A_SS from the whole Jacobian, A_MM the
 fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
 directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
 weak (the sweeps contract by ~3e-3 on the ureter) while Newton on the whole system applies every block's factor
@@ -46,6 +47,49 @@ from .newton import NewtonDivergence, fields_off, measure_field_increments
 
 # the order of a sweep: the wall first (it drives the flow), then the mesh it moves, then the urine
 ORDER = SPLITS
+
+
+def stale_factor(norm: float, previous: float | None, options) -> bool:
+    """A block's LU is stale when its update reduced the block's residual (`previous` -> `norm`) by less than
+    block_reuse_contraction; a residual within newton_atol is round-off, whose ratio says nothing of the LU (on the
+    50 mm ureter such ratios, ~5e-14 -> ~4e-14, refactorised the urine's LU every other step)."""
+    return previous is not None and norm > max(options.block_reuse_contraction * previous, options.newton_atol)
+
+
+@dataclass
+class RefreshSchedule:
+    """Rent or buy for the blocks' kept LUs (SolverOptions.block_refresh_sweeps = `limit`, 0: off): a stale LU
+    costs sweeps, a refresh its Jacobian and factorisation. Every converged step adds its sweeps beyond the floor,
+    the fewest a step needs with fresh LUs; once the sum since the wall's last refresh reaches `limit` the wall's LU
+    is due, and the urine's too when no step since then came down to the floor (the urine's LU costs the sweeps)."""
+    limit: int
+    floor: int | None = None        # the fewest sweeps of a step with fresh LUs
+    fewest: int | None = None       # the fewest sweeps of a step since the wall's last refresh
+    extra: int = 0                  # sweeps beyond the floor, summed over those steps
+    both_fresh: bool = False        # both LUs are due: the next step's sweeps are the new floor
+
+    def reset(self) -> None:
+        """Forget everything (the LUs are refactorised at their next use)."""
+        self.floor, self.fewest, self.extra, self.both_fresh = None, None, 0, False
+
+    def wall_refreshed(self) -> None:
+        self.fewest, self.extra = None, 0
+
+    def converged(self, sweeps: int) -> tuple[str, ...]:
+        """Record a converged step's sweeps; returns the blocks whose LUs are due ("solid", maybe "flow")."""
+        if not self.limit:
+            return ()
+        if self.floor is None or self.both_fresh:
+            self.floor, self.both_fresh = sweeps, False
+        self.floor = min(self.floor, sweeps)
+        self.fewest = sweeps if self.fewest is None else min(self.fewest, sweeps)
+        self.extra += sweeps - self.floor
+        if self.extra < self.limit:
+            return ()
+        if self.fewest > self.floor:
+            self.both_fresh = True
+            return "solid", "flow"
+        return ("solid",)
 
 
 class BlockFactor:
@@ -135,7 +179,9 @@ class PartitionedCoupling:
         self.kept = []                          # Anderson's differences (dx, dG) kept from earlier steps, newest first
         self.kept_rate = math.nan               # and the b0/dt they were made at
         self.contraction = 0.0                  # the sweeps' contraction estimate of the last step (error_bound)
-        pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0} | {f"{n}_solves": 0 for n in ORDER}
+        self.schedule = RefreshSchedule(pb.options.block_refresh_sweeps)
+        pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0, "scheduled_refreshes": 0}
+                        | {f"{n}_solves": 0 for n in ORDER}
                         | {f"{n}_factorisations": 0 for n in ORDER})
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
         pb.timings |= {"assemble_flow_jacobian": 0.0, "assemble_solid_jacobian": 0.0, "assemble_block_rows": 0.0}
@@ -145,6 +191,7 @@ class PartitionedCoupling:
         the mixing's differences and the contraction estimate of earlier steps."""
         for n in ("solid", "flow"):
             self.factors[n].rate = None
+        self.schedule.reset()
         self.kept = []
         self.contraction = 0.0
 
@@ -171,6 +218,8 @@ class PartitionedCoupling:
         self.factors[name].refresh(matrix, self.index[name], rate)
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
+        if name == "solid":
+            self.schedule.wall_refreshed()
 
     def _current(self, name: str) -> bool:
         rate = self.factors[name].rate
@@ -220,8 +269,9 @@ class PartitionedCoupling:
                 vec = self.block_residual(name)
                 rb = vec.getSubVector(index)
                 norm = rb.norm()
-            stale = previous is not None and norm > o.block_reuse_contraction * previous
-            if not self._current(name) or stale or not o.reuse_jacobian:
+            if name == "solid" and self.factors[name].rate is not None and not self._current(name):
+                self.schedule.reset()                   # another b0/dt: another operator, another floor
+            if not self._current(name) or stale_factor(norm, previous, o) or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()
             failed = self.factors[name].solve(rb, dx)
@@ -406,6 +456,10 @@ class PartitionedCoupling:
                     self._check_accepted(history[-1], sweep + 1, history)
                 self.contraction = self.step_contraction
                 self._keep(xs, gs)
+                due = self.schedule.converged(sweep + 1)
+                for n in due:
+                    self.factors[n].rate = None             # refreshed at the next step's first use
+                pb.counters["scheduled_refreshes"] += bool(due)
                 return sweep + 1, history
             if o.anderson_depth and (len(xs) > 1 or self.kept):
                 pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())

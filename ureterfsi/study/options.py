@@ -41,7 +41,8 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
                          coupling_scheme=s["fully_coupled_scheme"] if fully_coupled else "monolithic",
                          anderson_depth=s["anderson_depth"], anderson_reuse=s["anderson_reuse"],
                          block_iterations=s["block_iterations"],
-                         block_reuse_contraction=s["block_reuse_contraction"], solid_block=s["solid_block"],
+                         block_reuse_contraction=s["block_reuse_contraction"],
+                         block_refresh_sweeps=s["block_refresh_sweeps"], solid_block=s["solid_block"],
                          sweep_convergence=s["sweep_convergence"])
 
 
