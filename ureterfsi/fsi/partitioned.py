@@ -147,6 +147,7 @@ class PartitionedCoupling:
             raise ValueError(f"coupling_scheme 'partitioned' needs non-empty splits {ORDER} (a scene with a fluid and "
                              f"a solid region), got sizes {sizes}")
         self.index = pb.layout.split_is(splits)
+        self.solid_split = splits["solid"]
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
         self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
@@ -330,6 +331,18 @@ class PartitionedCoupling:
         new = [(b - a, d - c) for a, b, c, d in zip(xs[:-1], xs[1:], gs[:-1], gs[1:])]
         self.kept = (new[::-1] + self.kept)[:o.anderson_depth * o.anderson_reuse]
 
+    def match_kinematics(self) -> None:
+        """Set the paired solid velocities to the BDF derivative of their displacements,
+        v_i = (b0 u_i + b1 u_n,i + b2 u_nm1,i) / dt (v_i = 0 in a steady solve): the kinematic rows' nodal solution,
+        which an extrapolated guess breaks; done before a step's first assembly, it spares keep_kinematics'
+        correction and the re-assembly after it."""
+        pb, factor = self.pb, self.factors["solid"]
+        v, u = self.solid_split[factor.v_pos], self.solid_split[factor.u_pos]
+        b0, b1, b2 = (float(c.value) for c in pb.bdf)
+        x = pb.x.x.array
+        x[v] = (b0 * x[u] + b1 * pb.x_n.x.array[u] + b2 * pb.x_nm1.x.array[u]) / float(pb.dt.value)
+        pb.x.x.scatter_forward()
+
     def keep_kinematics(self, rb: PETSc.Vec) -> bool:
         """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
         velocities += M^-1 r_U of the solid split's residual `rb`. The condensed wall solve keeps these rows but
@@ -427,6 +440,8 @@ class PartitionedCoupling:
         step's first and, under "residual", each test's; the accepted state's last)."""
         pb, o = self.pb, self.pb.options
         self.field_increments, self.bound, self.step_contraction = {}, math.inf, 0.0
+        if self.condensed:
+            self.match_kinematics()
         r = r0 = pb._assemble_residual()
         if self.condensed:
             r = r0 = self.hold_kinematics()
@@ -457,20 +472,14 @@ class PartitionedCoupling:
                 self.contraction = self.step_contraction
                 self._keep(xs, gs)
                 due = self.schedule.converged(sweep + 1)
-                for n in due:
-                    self.factors[n].rate = None             # refreshed at the next step's first use
+                for block in due:
+                    self.factors[block].rate = None         # refreshed at the next step's first use
                 pb.counters["scheduled_refreshes"] += bool(due)
                 return sweep + 1, history
             if o.anderson_depth and (len(xs) > 1 or self.kept):
                 pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
                 pb.x.x.scatter_forward()
                 assembled = False
-            if o.sweep_convergence == "residual" and not assembled:
-                r = pb._assemble_residual()
-                history.append(r)
-                if not math.isfinite(r):
-                    raise NewtonDivergence(f"non-finite residual at sweep {sweep + 1}", history)
-                assembled = True
         self.invalidate()
         off = ", ".join(f"{f} {v:.1e}" for f, v in self._fields_off(o.newton_field_rtol).items())
         bound = f"; error bound {self.bound:.1e}" if o.sweep_convergence == "contraction" else ""
