@@ -74,8 +74,8 @@ class SolverOptions:
     # Newton's: a sweep's inner iterations are capped and Anderson mixing carries on, so a looser test pays)
     block_reuse_contraction: float = 0.5
     # partitioned: the wall's LU is refreshed at a step's start once the steps since its last refresh have needed
-    # this many sweeps more, summed, than the fewest of them (a stale wall LU's cost in sweeps outweighs a refresh's:
-    # rent or buy); 0 leaves refreshes to block_reuse_contraction alone
+    # this many sweeps, summed, beyond a step with fresh LUs (a stale LU's cost in sweeps outweighs a refresh's: rent
+    # or buy; the urine's LU too when it is the stale one, fsi.partitioned.RefreshSchedule); 0: contraction tests only
     block_refresh_sweeps: int = 4
     # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
     # fsi.condensation) or "whole" (the block as it stands)

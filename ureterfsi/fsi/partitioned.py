@@ -203,6 +203,11 @@ class PartitionedCoupling:
         pb = self.pb
         t0 = time.perf_counter()
         rate = pb._rate()
+        if name == "solid":
+            kept = self.factors[name].rate
+            if kept is not None and not math.isclose(kept, rate, rel_tol=1e-12):
+                self.schedule.reset()                   # another b0/dt: another operator, another floor
+            self.schedule.wall_refreshed()
         forms = self.forms.get(name)
         if forms is not None:
             matrix = forms.matrix
@@ -219,8 +224,6 @@ class PartitionedCoupling:
         self.factors[name].refresh(matrix, self.index[name], rate)
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
-        if name == "solid":
-            self.schedule.wall_refreshed()
 
     def _current(self, name: str) -> bool:
         rate = self.factors[name].rate
@@ -270,8 +273,6 @@ class PartitionedCoupling:
                 vec = self.block_residual(name)
                 rb = vec.getSubVector(index)
                 norm = rb.norm()
-            if name == "solid" and self.factors[name].rate is not None and not self._current(name):
-                self.schedule.reset()                   # another b0/dt: another operator, another floor
             if not self._current(name) or stale_factor(norm, previous, o) or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()
@@ -333,14 +334,11 @@ class PartitionedCoupling:
 
     def match_kinematics(self) -> None:
         """Set the paired solid velocities to the BDF derivative of their displacements,
-        v_i = (b0 u_i + b1 u_n,i + b2 u_nm1,i) / dt (v_i = 0 in a steady solve): the kinematic rows' nodal solution,
-        which an extrapolated guess breaks; done before a step's first assembly, it spares keep_kinematics'
-        correction and the re-assembly after it."""
+        v_i = du_i/dt (problem.time_derivative; v_i = 0 in a steady solve): the kinematic rows' nodal solution, which
+        an extrapolated guess breaks; done before a step's first assembly, it spares keep_kinematics' correction and
+        the re-assembly after it."""
         pb, factor = self.pb, self.factors["solid"]
-        v, u = self.solid_split[factor.v_pos], self.solid_split[factor.u_pos]
-        b0, b1, b2 = (float(c.value) for c in pb.bdf)
-        x = pb.x.x.array
-        x[v] = (b0 * x[u] + b1 * pb.x_n.x.array[u] + b2 * pb.x_nm1.x.array[u]) / float(pb.dt.value)
+        pb.x.x.array[self.solid_split[factor.v_pos]] = pb.time_derivative(self.solid_split[factor.u_pos])
         pb.x.x.scatter_forward()
 
     def keep_kinematics(self, rb: PETSc.Vec) -> bool:

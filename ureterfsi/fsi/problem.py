@@ -456,14 +456,19 @@ class MonolithicFSI:
                 self.x.x.array[:] = self.x_n.x.array
                 self.t.value = self.time
                 raise
-        b0, b1, b2 = (c.value for c in self.bdf)
-        self.x_dot.x.array[:] = (b0 * self.x.x.array + b1 * self.x_n.x.array + b2 * self.x_nm1.x.array) / dt
+        self.x_dot.x.array[:] = self.time_derivative()
         self._x_nm2[:] = self.x_nm1.x.array     # the step's own history, for assemble_reaction
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
         self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
         self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
         return its, history
+
+    def time_derivative(self, dofs=slice(None)) -> np.ndarray:
+        """The BDF time derivative (b0 x + b1 x_n + b2 x_nm1) / dt of the current state at the local `dofs`."""
+        b0, b1, b2 = (float(c.value) for c in self.bdf)
+        return (b0 * self.x.x.array[dofs] + b1 * self.x_n.x.array[dofs] + b2 * self.x_nm1.x.array[dofs]) \
+            / float(self.dt.value)
 
     def _predict(self, guess: str, dt: float):
         """Newton's initial guess for the step to t_n + dt, into x."""
