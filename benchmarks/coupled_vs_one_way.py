@@ -2,7 +2,9 @@
 no more than 3x the one-way cost): both solves of one model and mesh level start together, each as its own process
 (`python -m ureterfsi.study`, the solve rule's command), and the table gives each one's CPU time (user + system,
 from the kernel's accounting of the child), wall time and peak RSS, their ratios, and the one-way rung's errors
-against the fully coupled run (ureterfsi.ladder.relative_error, relative max norm per figure quantity).
+against the fully coupled run (ureterfsi.ladder.relative_error, relative max norm per figure quantity). Each solve
+runs with the thread count the solve rule gets (`threads: 1`: Snakemake sets OMP_NUM_THREADS, OPENBLAS_NUM_THREADS,
+... to the rule's threads), so MUMPS's OpenMP and BLAS threads do not spin on the other solve's core.
 
     python benchmarks/coupled_vs_one_way.py --out /tmp/cvo                          # model 3, coarse, 3 s
     python benchmarks/coupled_vs_one_way.py --level medium --end 1.0 --out /tmp/cvo_medium
@@ -24,6 +26,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 RUNGS = ("fully_coupled", "one_way")
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "GOTO_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                    "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")  # those Snakemake's shell sets to `threads`
 
 
 def prerequisites(configs: list[str], model: str, level: str, symmetry: str) -> dict:
@@ -41,7 +45,8 @@ def launch(rung: str, paths: dict, args, out: Path) -> tuple[subprocess.Popen, f
            "--out", str(out / f"{rung}.nc"), "--end", str(args.end), "--dt", str(args.dt)]
     cmd += ["--checkpoint", str(out / f"{rung}.ckpt")] if rung == "fully_coupled" else ["--wall", paths["wall"]]
     log = open(out / f"{rung}.log", "w")
-    return subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT), time.perf_counter()
+    env = os.environ | dict.fromkeys(THREAD_VARIABLES, str(args.threads))
+    return subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT), time.perf_counter()
 
 
 def run(args) -> dict:
@@ -61,7 +66,7 @@ def run(args) -> dict:
         cost[rung] = {"cpu_s": usage.ru_utime + usage.ru_stime, "user_s": usage.ru_utime,
                       "wall_s": time.perf_counter() - started, "peak_gib": usage.ru_maxrss / 2**20}
     result = {"model": args.model, "level": args.level, "symmetry": args.symmetry, "end": args.end, "dt": args.dt,
-              "cost": cost}
+              "threads": args.threads, "cost": cost}
     (out / "benchmark.json").write_text(json.dumps(result, indent=1))
     return result
 
@@ -78,7 +83,8 @@ def table(out: Path) -> str:
     fc, ow = (cost[r] for r in RUNGS)
     sweeps = json.loads(runs["fully_coupled"].attrs.get("counters", "{}")).get("sweeps")
     lines = [f"model {result['model']}, {result['level']} {result['symmetry']}, 0-{result['end']} s at dt = "
-             f"{result['dt']} s; fully coupled: {runs['fully_coupled'].attrs.get('dofs')} unknowns, {sweeps} sweeps",
+             f"{result['dt']} s, {result.get('threads', 'default')} thread(s) per solve; fully coupled: "
+             f"{runs['fully_coupled'].attrs.get('dofs')} unknowns, {sweeps} sweeps",
              "", "| rung | CPU s (user) | wall s | peak |", "|---|---|---|---|"]
     lines += [f"| {r} | {cost[r]['cpu_s']:.0f} ({cost[r]['user_s']:.0f}) | {cost[r]['wall_s']:.0f} | "
               f"{cost[r]['peak_gib']:.2f} GiB |" for r in RUNGS]
@@ -99,6 +105,7 @@ def main() -> None:
     ap.add_argument("--symmetry", default="quarter")
     ap.add_argument("--end", type=float, default=3.0, help="simulated time [s]")
     ap.add_argument("--dt", type=float, default=0.01, help="time step [s]")
+    ap.add_argument("--threads", type=int, default=1, help="threads per solve (the solve rule's)")
     ap.add_argument("--out", help="directory of the runs")
     ap.add_argument("--from-dir", help="no run: the table of an earlier --out directory")
     args = ap.parse_args()

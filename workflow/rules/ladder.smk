@@ -39,7 +39,7 @@ if LADDER:
             launcher=ladder_launcher,
             checkpoint="results/checkpoints/ladder/{rung}.npz",
         shell:
-            "OPENBLAS_NUM_THREADS={threads} {params.launcher} -m ureterfsi.study"
+            "{params.launcher} -m ureterfsi.study"
             " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
             " --symmetry {params.rung[symmetry]} --fidelity {params.rung[fidelity]} --mesh {input.mesh}"
             " --out {output} --checkpoint {params.checkpoint} --end {params.end} --dt {params.rung[dt]}"

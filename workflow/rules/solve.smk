@@ -61,7 +61,7 @@ rule solve:
         wall=solve_wall,
         launcher=solve_launcher,
     shell:
-        "OPENBLAS_NUM_THREADS={threads} {params.launcher} -m ureterfsi.study"
+        "{params.launcher} -m ureterfsi.study"
         " --run-config {input.config} --model {wildcards.model} --level {wildcards.level}"
         " --symmetry {wildcards.symmetry} --fidelity {wildcards.fidelity} --mesh {input.mesh}"
         " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall} > {log} 2>&1"

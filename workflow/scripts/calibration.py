@@ -1,11 +1,8 @@
 """Snakemake script of rule `calibration`: design-rule check and calibration of the wall (paper §2.4.2)."""
 import logging
-import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-from ureterfsi.calibration import format_report, write_report  # noqa: E402
-from ureterfsi.workflow_log import run_script  # noqa: E402
+from ureterfsi.calibration import format_report, write_report
+from ureterfsi.workflow_log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -6,16 +6,13 @@ mesh) ends in one line naming the point, in the rule's log and in Snakemake's er
 failure, ureterfsi.designs.write_failed_corner): the rung is not checked there, which the study's rung check
 reports; the job succeeds so that the study's other corners and its points are still made."""
 import logging
-import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-from ureterfsi.designs import corner_solve_request, studies, write_failed_corner  # noqa: E402
-from ureterfsi.fsi import SolveFailure  # noqa: E402
-from ureterfsi.study.cli import solve  # noqa: E402
-from ureterfsi.study.oneway import MeshMotionRefused  # noqa: E402
-from ureterfsi.study.options import RunSpec  # noqa: E402
-from ureterfsi.workflow_log import run_script  # noqa: E402
+from ureterfsi.designs import corner_solve_request, studies, write_failed_corner
+from ureterfsi.fsi import SolveFailure
+from ureterfsi.study.cli import solve
+from ureterfsi.study.oneway import MeshMotionRefused
+from ureterfsi.study.options import RunSpec
+from ureterfsi.workflow_log import run_script
 
 
 def main(smk):
