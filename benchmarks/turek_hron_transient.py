@@ -80,6 +80,8 @@ def main(argv=None):
                     help="--start steady: upward push on the flag [m/s^2] over [s]")
     ap.add_argument("--mesh-motion", choices=("harmonic", "elastic"), default="harmonic")
     ap.add_argument("--mesh-stiffening", type=float, default=1.0, help="exponent q of (V_mean/V_cell)^q")
+    ap.add_argument("--mesh-jacobian-stiffening", type=float, default=0.0,
+                    help="exponent chi of the deformation-dependent stiffening J^-chi")
     ap.add_argument("--window", type=float, help="statistics over the last WINDOW seconds")
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--json", help="write series and cost here")
@@ -92,11 +94,13 @@ def main(argv=None):
         case = run["case"] if run else args.case
     else:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
-        options = th.transient_options(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening)
+        options = th.transient_options(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening,
+                                       mesh_jacobian_stiffening=args.mesh_jacobian_stiffening)
         res = th.run_transient(args.case, args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
                                options=options, series_path=args.json)
         case, series = args.case, {k: v.tolist() for k, v in res.series.items()}
-        run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening}
+        run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening,
+               "mesh_jacobian_stiffening": args.mesh_jacobian_stiffening}
         run.update({k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
                                                  "setup_time", "wall_time", "steps", "newton_iterations",
                                                  "reduced_steps", "min_ale_jacobian")})

@@ -20,6 +20,9 @@ class SolverOptions:
     quadrature_degree: int = 4
     mesh_motion: str = "harmonic"       # harmonic | elastic
     mesh_stiffening: float = 1.0        # exponent q of (V_mean / V_cell)^q
+    # exponent chi of the deformation-dependent stiffening J^-chi of the monolithic mesh motion (0: a linear
+    # extension, its Jacobian assembled once; > 0: nonlinear, for large swings: physics.mesh_motion_residual)
+    mesh_jacobian_stiffening: float = 0.0
     newton_rtol: float = 1e-8           # residual reduction relative to the step's first residual
     newton_atol: float = 1e-10          # absolute residual norm
     # stagnation exit: every field's Newton increment below this fraction of the field's max norm

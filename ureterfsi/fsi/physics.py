@@ -115,13 +115,17 @@ def kinematic_residual(ops, dudt, v, psi, dx):
     return ufl.dot(ops.vec(dudt - v), ops.vec(psi)) * ops.weight * dx
 
 
-def mesh_motion_residual(ops, kind, u, psi, stiffness, dx):
+def mesh_motion_residual(ops, kind, u, psi, stiffness, dx, jacobian_exponent=0.0):
     """Extension of the interface displacement into the fluid (ALE mesh motion).
 
     harmonic: int k Grad u : Grad psi;  elastic: int k (2 eps(u):eps(psi) + div u div psi),
-    with stiffness k a cell-wise field (e.g. (V_ref/V_cell)^q) that stiffens small cells. The weight
+    with stiffness k a cell-wise field (e.g. (V_ref/V_cell)^q) that stiffens small cells, times J^-chi,
+    J = det(I + Grad u), for a `jacobian_exponent` chi > 0 (Jacobian-based stiffening, Stein, Tezduyar &
+    Benney 2003: cells the motion compresses resist it more; the extension is then nonlinear in u). The weight
     is dimensionless: only the solution of these rows matters (rows at the interface are removed).
     """
+    if jacobian_exponent:
+        stiffness = stiffness * ufl.det(deformation_gradient(ops, u)) ** (-jacobian_exponent)
     if kind == "harmonic":
         integrand = stiffness * ufl.inner(ops.grad(u), ops.grad(psi))
     elif kind == "elastic":

@@ -76,6 +76,13 @@ class MonolithicFSI:
         if opts.linear_solver in KRYLOV and self.segregated:
             raise ValueError(f"linear_solver {opts.linear_solver!r} preconditions the coupled FSI system: it needs "
                              "mesh_motion_coupling 'monolithic'")
+        if opts.mesh_jacobian_stiffening < 0.0:
+            raise ValueError(f"mesh_jacobian_stiffening >= 0, got {opts.mesh_jacobian_stiffening!r}")
+        if opts.mesh_jacobian_stiffening and (self.segregated or opts.coupling_scheme != "monolithic"
+                                              or opts.linear_solver in KRYLOV):
+            raise ValueError("mesh_jacobian_stiffening > 0 (a nonlinear mesh motion) needs mesh_motion_coupling "
+                             "'monolithic', coupling_scheme 'monolithic' and a direct linear_solver (the others keep "
+                             "the mesh block's operator fixed)")
 
         # --- mixed space --------------------------------------------------------------------
         elements = {"velocity": ufl.VectorElement("Lagrange", cell, opts.velocity_degree),
@@ -138,7 +145,8 @@ class MonolithicFSI:
         if fluid_tags:
             self.stiffness = cell_stiffness(mesh, self.cells(fluid_tags), opts.mesh_stiffening)
         if fluid_tags and not self.segregated:
-            Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags))
+            Rm = physics.mesh_motion_residual(ops, opts.mesh_motion, u, psi, self.stiffness, dx(fluid_tags),
+                                              opts.mesh_jacobian_stiffening)
             self.mesh_form = fem.form(Rm)
             self.mesh_jacobian_form = fem.form(ufl.derivative(Rm, self.x))
 
@@ -361,14 +369,15 @@ class MonolithicFSI:
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
 
     def mesh_motion_matrix(self) -> PETSc.Mat:
-        """The mesh-motion rows' Jacobian (the interface's and Dirichlet rows removed): a linear extension with a
-        fixed stiffness, assembled once."""
+        """The mesh-motion rows' Jacobian (the interface's and Dirichlet rows removed) at the current state: a linear
+        extension's assembled once, a Jacobian-stiffened one's (mesh_jacobian_stiffening > 0) at every call."""
         Am = self.Am
         if not self._mesh_jacobian_ready:
+            Am.zeroEntries()
             fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
             Am.assemble()
             Am.zeroRows(self.constraints.mesh_rows, diag=0.0)
-            self._mesh_jacobian_ready = True
+            self._mesh_jacobian_ready = not self.options.mesh_jacobian_stiffening
         return Am
 
     def _rate(self) -> float:
