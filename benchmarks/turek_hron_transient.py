@@ -71,7 +71,7 @@ def cost(run: dict, frequency: float) -> str:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--case", choices=sorted(th.CASES), default="FSI3")
+    ap.add_argument("--case", choices=sorted(th.CASES), help="FSI3 unless --from-json names it")
     ap.add_argument("--refinement", type=float, default=0.5)
     ap.add_argument("--dt", type=float, default=1e-3, help="time step [s]")
     ap.add_argument("--end", type=float, default=10.0, help="end time [s]")
@@ -92,13 +92,15 @@ def main(argv=None):
         saved = json.loads(Path(args.from_json).read_text())
         run, series = saved.get("run"), saved.get("series", saved)
         case = run["case"] if run else args.case
+        if case is None:
+            ap.error(f"{args.from_json} holds a series written while its run went on (no case recorded): give --case")
     else:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
         options = th.transient_options(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening,
                                        mesh_jacobian_stiffening=args.mesh_jacobian_stiffening)
-        res = th.run_transient(args.case, args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
+        res = th.run_transient(args.case or "FSI3", args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
                                options=options, series_path=args.json)
-        case, series = args.case, {k: v.tolist() for k, v in res.series.items()}
+        case, series = res.case, {k: v.tolist() for k, v in res.series.items()}
         run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening,
                "mesh_jacobian_stiffening": args.mesh_jacobian_stiffening}
         run.update({k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
