@@ -109,6 +109,29 @@ def test_ladder_dataset_table_and_figure(cfg, tmp_path):
     assert out[0].stat().st_size > 1000
 
 
+def test_overlay_figure_draws_every_rung_of_every_quantity(cfg, tmp_path):
+    """The overlay's six panels each hold the reference and the other rung, the latter 2 % above (the scaled run),
+    the hole the reference's largest-flow hole and the wall profile the last probe time's."""
+    ref = synthetic_run(cfg, "3", end=1.0, wall_time=100.0)
+    runs = {"fully_coupled": ref, "one_way": scaled(synthetic_run(cfg, "3", end=1.0, wall_time=20.0), 0.02)}
+    fig = plotting.ladder_overlay(runs, "fully_coupled")
+    hole = int(np.abs(ref["hole_flux"]).max("time").argmax())
+    expected = {"outlet_flux": ref["outlet_flux"].values, "inlet_flux": ref["inlet_flux"].values,
+                "hole_flux": ref["hole_flux"].isel(hole=hole).values,
+                "stent_max_von_mises": ref["stent_max_von_mises"].values,
+                "max_wall_displacement": ref["max_wall_displacement"].values,
+                "wall_radial_displacement": ref["wall_radial_displacement"].isel(probe_time=-1).values}
+    for ax, q in zip(fig.axes, plotting.LADDER_OVERLAY):
+        lines = ax.get_lines()
+        assert [ln.get_linestyle() for ln in lines] == ["-", "--"], q
+        np.testing.assert_allclose(lines[0].get_ydata(), expected[q], err_msg=q)
+        factor = 1.02 if q in SCALED else 1.0
+        np.testing.assert_allclose(lines[1].get_ydata(), factor * expected[q], rtol=1e-12, err_msg=q)
+    out = [tmp_path / "overlay.png"]
+    plotting.save_figure(fig, out)
+    assert out[0].stat().st_size > 1000
+
+
 def test_default_rung_and_recorded_error_checks(cfg):
     """The rung of the default runs is found by fidelity, symmetry, level and time step; a recorded error
     agrees with a measurement to 10 %; a default error above a tolerance is flagged in the table."""

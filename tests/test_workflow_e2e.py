@@ -556,6 +556,6 @@ def test_ladder_target(e2e):
         assert run.attrs["fidelity"] == "one_way"
         assert run.attrs["one_way_max_wall_pressure_deviation"] < 1e-2 * run.attrs["one_way_peristaltic_peak_traction"]
         assert run.attrs["one_way_max_stent_displacement"] < 1e-2 * run.attrs["one_way_hole_diameter"]
-    for p in ("results/figures/table_ladder.md", "results/figures/ladder_pareto.png",
+    for p in ("results/figures/table_ladder.md", "results/figures/ladder_pareto.png", "results/figures/ladder_overlay.png",
               "results/logs/ladder/one_way.log", "results/benchmarks/ladder/one_way.tsv"):
         assert (e2e.dir / p).stat().st_size > 0, p

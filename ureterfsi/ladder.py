@@ -98,10 +98,15 @@ def recorded_error_agrees(recorded: float, measured: float) -> bool:
     return bool(abs(measured - recorded) <= 0.1 * abs(recorded) + 1e-4)
 
 
+def open_runs(paths: dict) -> dict:
+    """{rung: run dataset} of `paths`, each checked as a run file."""
+    return {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
+
+
 def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
     """Error of every rung against the reference for every quantity, with cost and the scene choices."""
     lad = cfg["ladder"]
-    runs = {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
+    runs = open_runs(paths)
     ref = runs[lad["reference"]]
     names = list(runs)
     quantities = [q for q in QUANTITIES if q in ref]

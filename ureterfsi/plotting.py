@@ -528,6 +528,51 @@ def stability_map(ds: xr.Dataset):
 
 
 # ------------------------------------------------------------------------------------ fidelity ladder
+LADDER_OVERLAY = {"outlet_flux": "outlet flow (Fig. 4)", "inlet_flux": "inlet flow",
+                  "hole_flux": "side-hole flow (Fig. 11)", "stent_max_von_mises": "stent's largest von Mises (Fig. 10)",
+                  "max_wall_displacement": "wall's largest radial displacement",
+                  "wall_radial_displacement": "wall's radial displacement (Fig. 5)"}
+
+
+def ladder_overlay(runs: dict, reference: str):
+    """The figure quantities of every rung of the ladder over each other (`runs`: rung -> run dataset): the time
+    series, the side hole whose flow is largest in the `reference` run (matched by position in the others), and the
+    wall's radial displacement at the last probe time; the reference solid, the other rungs dashed."""
+    ref = runs[reference]
+    names = [reference] + [r for r in runs if r != reference]
+    fig, axs = plt.subplots(2, 3, figsize=(12, 6.4), layout="constrained")
+    hole = int(np.abs(ref["hole_flux"]).max("time").argmax()) if ref.sizes.get("hole") else None
+    for ax, q in zip(axs.flat, LADDER_OVERLAY):
+        attrs = ref[q].attrs
+        for k, r in enumerate(names):
+            run, style = runs[r], dict(lw=1.6, color="k") if r == reference else dict(lw=1.2, ls="--", color=f"C{k}")
+            if q == "hole_flux":
+                if hole is None:
+                    continue
+                key = (round(float(ref["hole_z"][hole]), 9), float(ref["hole_side"][hole]))
+                match = [i for i, (z, sd) in enumerate(zip(run["hole_z"].values, run["hole_side"].values))
+                         if (round(float(z), 9), float(sd)) == key]
+                if not match:
+                    continue
+                ax.plot(run["time"], run[q].isel(hole=match[0]), label=r, **style)
+            elif q == "wall_radial_displacement":
+                last = run["probe_time"].values[-1]
+                ax.plot(run["z"] * 1e3, run[q].sel(probe_time=last), label=f"{r} ({last:g} s)", **style)
+            else:
+                ax.plot(run["time"], run[q], label=r, **style)
+        title = LADDER_OVERLAY[q]
+        if q == "hole_flux" and hole is not None:
+            title += f", hole at z = {float(ref['hole_z'][hole]) * 1e3:.2f} mm"
+        ax.set_title(title, fontsize=9)
+        ax.set_ylabel(f"{q.replace('_', ' ')} ({attrs.get('units', '-')})", fontsize=8)
+        ax.set_xlabel("z (mm)" if q == "wall_radial_displacement" else "time (s)", fontsize=8)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"Fidelity ladder: the rungs' figure quantities over each other (reference '{reference}', solid)",
+                 fontsize=10)
+    return fig
+
+
 def ladder_pareto(ds: xr.Dataset):
     """Speed-accuracy trade of the fidelity ladder: wall time of each rung against its error for every
     quantity (ureterfsi.ladder); the reference rung (error 0) is drawn on the lower axis limit."""

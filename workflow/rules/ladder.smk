@@ -56,6 +56,7 @@ if LADDER:
                 category="Fidelity ladder",
             ),
             figures=figure_outputs("ladder_pareto", "Fidelity ladder"),
+            overlay=figure_outputs("ladder_overlay", "Fidelity ladder"),
         log:
             "results/logs/ladder/ladder.log",
         params:

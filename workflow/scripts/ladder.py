@@ -1,5 +1,6 @@
 """Snakemake script of rule `ladder` (workflow/rules/ladder.smk): rung runs -> ladder dataset, Markdown table
-and speed-accuracy figure (ureterfsi.ladder, ureterfsi.plotting.ladder_pareto), all written atomically."""
+and speed-accuracy figure (ureterfsi.ladder, ureterfsi.plotting.ladder_pareto), the rungs' figure quantities over
+each other (ureterfsi.plotting.ladder_overlay), all written atomically."""
 import logging
 
 from ureterfsi.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
@@ -11,11 +12,15 @@ smk = snakemake  # noqa: F821
 
 
 def main():
-    ds = ladder.ladder_dataset(dict(zip(smk.params.rungs, smk.input.runs)), smk.config)
+    paths = dict(zip(smk.params.rungs, smk.input.runs))
+    ds = ladder.ladder_dataset(paths, smk.config)
     write_dataset(ds, smk.output.dataset)
     with atomic_path(smk.output.md) as tmp:
         tmp.write_text(ladder.ladder_table(ds))
     plotting.save_figure(plotting.ladder_pareto(ds), smk.output.figures, dpi=smk.params.figures["dpi"])
+    runs = ladder.open_runs(paths)
+    plotting.save_figure(plotting.ladder_overlay(runs, ds.attrs["reference"]), smk.output.overlay,
+                         dpi=smk.params.figures["dpi"])
     logging.info("\n%s", ladder.ladder_table(ds))
 
 
