@@ -30,7 +30,7 @@ SNAPSHOTS = ("stent_von_mises_line", "wall_radial_displacement", "hole_velocity_
 QUANTITIES = SERIES + SNAPSHOTS
 
 
-def _common_holes(ref: xr.Dataset, run: xr.Dataset):
+def common_holes(ref: xr.Dataset, run: xr.Dataset):
     """Indices (ref, run) of the side holes present in both runs, matched by (z, side)."""
     key = lambda ds: [(round(float(z), 9), float(s)) for z, s in zip(ds["hole_z"].values, ds["hole_side"].values)]  # noqa: E731
     kr, kn = key(ref), key(run)
@@ -55,7 +55,7 @@ def relative_error(ref: xr.Dataset, run: xr.Dataset, name: str) -> float:
         a = ref[name].values[..., keep]          # time last (CF §2.4)
         b = run[name].values
         if name == "hole_flux":
-            i, j = _common_holes(ref, run)
+            i, j = common_holes(ref, run)
             a, b = a[i], b[j]
             b = np.stack([np.interp(t_ref[keep], t_run, bk) for bk in b])
         else:

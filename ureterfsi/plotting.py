@@ -23,6 +23,7 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from . import tags  # noqa: E402
 from .checked_io import Contract, read_json  # noqa: E402
+from .ladder import common_holes  # noqa: E402
 from .meshfile import read_msh  # noqa: E402
 from .provenance import atomic_path  # noqa: E402
 from .stability import AXES, AXIS_PARAMETER, format_value  # noqa: E402
@@ -549,12 +550,10 @@ def ladder_overlay(runs: dict, reference: str):
             if q == "hole_flux":
                 if hole is None:
                     continue
-                key = (round(float(ref["hole_z"][hole]), 9), float(ref["hole_side"][hole]))
-                match = [i for i, (z, sd) in enumerate(zip(run["hole_z"].values, run["hole_side"].values))
-                         if (round(float(z), 9), float(sd)) == key]
-                if not match:
+                in_ref, in_run = common_holes(ref, run)
+                if hole not in in_ref:
                     continue
-                ax.plot(run["time"], run[q].isel(hole=match[0]), label=r, **style)
+                ax.plot(run["time"], run[q].isel(hole=in_run[in_ref.index(hole)]), label=r, **style)
             elif q == "wall_radial_displacement":
                 last = run["probe_time"].values[-1]
                 ax.plot(run["z"] * 1e3, run[q].sel(probe_time=last), label=f"{r} ({last:g} s)", **style)
