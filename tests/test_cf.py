@@ -79,7 +79,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
     """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3 (or of a Saltelli
     design of N = 2 over two parameters: 12 rows, 8 points, with its Sobol' indices)."""
     from test_aggregate_figures import synthetic_run
-    from ureterfsi import designs
+    from ureterfsi import design_results, designs
     from ureterfsi.config import load_config
 
     grid = {"model": "3", "level": "coarse",
@@ -99,7 +99,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         for k, f in enumerate(corners[c.id]):
             metadata.write_netcdf(synthetic_run(c.config, "3", end=c.config["time"]["end"], wall_time=1.0 + k), f)
-    return designs.study_dataset(cfg, "s", paths, designs.rung_check_dataset(cfg, "s", corners))
+    return design_results.study_dataset(cfg, "s", paths, design_results.rung_check_dataset(cfg, "s", corners))
 
 
 KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",

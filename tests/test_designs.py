@@ -206,7 +206,7 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
         assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
-    from ureterfsi.designs import QUANTITIES
+    from ureterfsi.design_results import QUANTITIES
     from ureterfsi.plotting_designs import map_figure
 
     drawn = [q for q in QUANTITIES if np.isfinite(ds[q].values).any()]
@@ -543,7 +543,7 @@ def _one_point(tmp_path, name: str, params: dict):
 
 def _lumen_balance(run, ds):
     """Stent-lumen mass balance: inflow - outflow - sum_k w_k Q_k (w_k the holes each recorded one stands for)."""
-    from ureterfsi.designs import hole_mirror_weights
+    from ureterfsi.design_results import hole_mirror_weights
 
     q, lumen, inflow = run["outlet_flux"].values, run["outlet_lumen_flux"].values, run["inlet_lumen_flux"].values
     flux = run["hole_flux"].transpose("time", "hole").values
@@ -599,7 +599,7 @@ def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     import netCDF4  # noqa: F401
     from ureterfsi.study import oneway
     from ureterfsi.config import load_config_files
-    from ureterfsi.designs import hole_mirror_weights
+    from ureterfsi.design_results import hole_mirror_weights
     from ureterfsi.mesh import build_mesh, mirror_mesh
     from ureterfsi.study.options import RunSpec
 

@@ -16,7 +16,8 @@ import yaml
 from ureterfsi import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
-from ureterfsi.designs import QUANTITIES, corner_run_paths, point_id, rung_check_dataset, studies, study_dataset
+from ureterfsi.designs import corner_run_paths, point_id, studies
+from ureterfsi.design_results import QUANTITIES, rung_check_dataset, study_dataset
 from ureterfsi import metadata
 from ureterfsi.metadata import rung_check_metadata
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
@@ -77,7 +78,7 @@ def test_relative_errors():
 
 def test_outlet_flow_errors_are_relative_to_the_flow():
     """The peak and mean outlet flow's errors over the run's largest |Q_out|, the backflow's over integral |Q_out| dt."""
-    from ureterfsi.designs import error_scales
+    from ureterfsi.design_results import error_scales
 
     t = np.linspace(0.0, 0.04, 5)
     run = xr.Dataset({"outlet_flux": ("time", np.array([0.0, -2.0, -4.0, 1.0, 2.0]))}, coords={"time": t})
@@ -338,7 +339,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
     """A fully coupled corner solve that fails (the thin-gap corner f = 0.7 inverts the harmonic mesh motion at 40
     ms) is recorded by its job as a run file holding the failure: the check names it, no error is claimed there, and
     no point is trusted."""
-    from ureterfsi.designs import write_failed_corner
+    from ureterfsi.design_results import write_failed_corner
 
     cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
     st = studies(cfg)["s"]

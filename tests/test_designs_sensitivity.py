@@ -13,8 +13,8 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import ConfigError, load_config
-from ureterfsi.designs import (SOBOL_INDICES, add_sobol_indices, saltelli_unit_sample, sobol_indices, studies,
-                               study_dataset)
+from ureterfsi.designs import saltelli_unit_sample, studies
+from ureterfsi.design_results import SOBOL_INDICES, add_sobol_indices, sobol_indices, study_dataset
 from ureterfsi import metadata
 from ureterfsi.metadata import VARIABLES
 from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR

@@ -1,4 +1,4 @@
-"""Figures of the design studies (ureterfsi.designs datasets): each quantity against each parameter; for a
+"""Figures of the design studies (ureterfsi.design_results datasets): each quantity against each parameter; for a
 full-factorial grid a map over two parameters; for a sample a sensitivity ranking: the Sobol' indices S1, ST
 of a Saltelli design, else the standardised regression coefficients (SRC_j = b_j s_xj / s_y of a linear
 least-squares fit)."""
@@ -13,7 +13,8 @@ import itertools  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from .designs import PARAMETERS, QUANTITIES, map_parameters, standardised_regression_coefficients  # noqa: E402
+from .design_results import QUANTITIES, standardised_regression_coefficients  # noqa: E402
+from .designs import PARAMETERS, map_parameters  # noqa: E402
 
 
 def _parameters(ds: xr.Dataset) -> list:
@@ -88,7 +89,7 @@ def map_figure(ds: xr.Dataset):
 
 def sobol_figure(ds: xr.Dataset):
     """First-order and total Sobol' indices S1, ST of each quantity (panels) per parameter, bars with their 95 %
-    confidence intervals (ureterfsi.designs.sobol_indices)."""
+    confidence intervals (ureterfsi.design_results.sobol_indices)."""
     params = [str(p) for p in ds["parameter"].values]
     quantities = [str(q) for q in ds["quantity"].values if np.isfinite(ds["sobol_total"].sel(quantity=q).values).any()]
     n = max(len(quantities), 1)

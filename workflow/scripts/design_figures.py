@@ -2,7 +2,7 @@
 import logging
 
 from ureterfsi.checked_io import open_netcdf
-from ureterfsi.designs import DESIGN_DATASET
+from ureterfsi.design_results import DESIGN_DATASET
 from ureterfsi.plotting import save_figure
 from ureterfsi.plotting_designs import map_figure, parameters_figure, sensitivity_figure
 from ureterfsi.workflow_log import run_script

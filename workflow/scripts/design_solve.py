@@ -3,11 +3,12 @@ corner of the design space on the segment, on the study's rung or fully coupled:
 ureterfsi.study.cli.solve. A point that cannot be solved (refused before the solve, a step that fails, an inverted
 mesh) ends in one line naming the point, in the rule's log and in Snakemake's error report
 (ureterfsi.workflow_log.run_script). A corner's solve that fails is recorded instead (a run file holding the
-failure, ureterfsi.designs.write_failed_corner): the rung is not checked there, which the study's rung check
+failure, ureterfsi.design_results.write_failed_corner): the rung is not checked there, which the study's rung check
 reports; the job succeeds so that the study's other corners and its points are still made."""
 import logging
 
-from ureterfsi.designs import corner_solve_request, studies, write_failed_corner
+from ureterfsi.design_results import write_failed_corner
+from ureterfsi.designs import corner_solve_request, studies
 from ureterfsi.fsi import SolveFailure
 from ureterfsi.study.cli import solve
 from ureterfsi.study.oneway import MeshMotionRefused
