@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from test_aggregate_figures import synthetic_run
-from ureterfsi import ladder, plotting
+from ureterfsi import ladder, plotting, plotting_ladder
 from ureterfsi.config import load_config
 
 SCALED = ("outlet_flux", "stent_max_von_mises", "stent_von_mises_line", "wall_radial_displacement",
@@ -105,7 +105,7 @@ def test_ladder_dataset_table_and_figure(cfg, tmp_path):
     assert recorded == cfg["scenes"]["fig04_outlet_flow"]["measured_error"]
     assert "within tolerance, " + ("matches" if ladder.recorded_error_agrees(recorded, 0.02) else "differs") in table
     out = [tmp_path / "pareto.png"]
-    plotting.save_figure(plotting.ladder_pareto(ds), out)
+    plotting.save_figure(plotting_ladder.ladder_pareto(ds), out)
     assert out[0].stat().st_size > 1000
 
 
@@ -114,14 +114,14 @@ def test_overlay_figure_draws_every_rung_of_every_quantity(cfg, tmp_path):
     the hole the reference's largest-flow hole and the wall profile the last probe time's."""
     ref = synthetic_run(cfg, "3", end=1.0, wall_time=100.0)
     runs = {"fully_coupled": ref, "one_way": scaled(synthetic_run(cfg, "3", end=1.0, wall_time=20.0), 0.02)}
-    fig = plotting.ladder_overlay(runs, "fully_coupled")
+    fig = plotting_ladder.ladder_overlay(runs, "fully_coupled")
     hole = int(np.abs(ref["hole_flux"]).max("time").argmax())
     expected = {"outlet_flux": ref["outlet_flux"].values, "inlet_flux": ref["inlet_flux"].values,
                 "hole_flux": ref["hole_flux"].isel(hole=hole).values,
                 "stent_max_von_mises": ref["stent_max_von_mises"].values,
                 "max_wall_displacement": ref["max_wall_displacement"].values,
                 "wall_radial_displacement": ref["wall_radial_displacement"].isel(probe_time=-1).values}
-    for ax, q in zip(fig.axes, plotting.LADDER_OVERLAY):
+    for ax, q in zip(fig.axes, plotting_ladder.LADDER_OVERLAY):
         lines = ax.get_lines()
         assert [ln.get_linestyle() for ln in lines] == ["-", "--"], q
         np.testing.assert_allclose(lines[0].get_ydata(), expected[q], err_msg=q)

@@ -103,10 +103,11 @@ def open_runs(paths: dict) -> dict:
     return {name: open_netcdf(p, RUN_FILE) for name, p in paths.items()}
 
 
-def ladder_dataset(paths: dict, cfg: dict) -> xr.Dataset:
-    """Error of every rung against the reference for every quantity, with cost and the scene choices."""
+def ladder_dataset(paths: dict, cfg: dict, runs: dict | None = None) -> xr.Dataset:
+    """Error of every rung against the reference for every quantity, with cost and the scene choices; `runs`: the
+    run files of `paths` already opened (open_runs), else opened here."""
     lad = cfg["ladder"]
-    runs = open_runs(paths)
+    runs = runs if runs is not None else open_runs(paths)
     ref = runs[lad["reference"]]
     names = list(runs)
     quantities = [q for q in QUANTITIES if q in ref]
