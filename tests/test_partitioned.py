@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
 from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
@@ -326,3 +327,25 @@ def test_a_step_starts_with_the_kinematic_rows_holding(reference_8_steps):
     pb, _ = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, steps=8, **TOL)
     assert pb.counters["kinematic_corrections"] == 0, pb.counters
     assert max(field_errors(pb, reference_8_steps).values()) <= 1e-6
+
+
+def test_a_cheaper_wall_jacobian_keeps_the_solution(reference):
+    """wall_jacobian_quadrature_degree integrates the wall's kept Jacobian with its own rule: another matrix (the
+    Mooney-Rivlin wall's entries move), the same rows, so the same fixed point within the tolerance."""
+    matrices = {}
+    for degree in (None, 2):
+        pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", wall_jacobian_quadrature_degree=degree,
+                                                   **TOL))
+        pb.solve_steady()
+        wall = pb.partitioned.forms["solid"]
+        wall.matrix.zeroEntries()
+        fem_petsc.assemble_matrix(wall.matrix, wall.jacobian, bcs=pb.bcs)
+        wall.matrix.assemble()
+        matrices[degree] = wall.matrix.copy()
+    matrices[2].axpy(-1.0, matrices[None])
+    change = matrices[2].norm() / matrices[None].norm()
+    assert 1e-8 < change < 0.1, change
+    pb, sweeps = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, wall_jacobian_quadrature_degree=2,
+                          **TOL)
+    assert max(field_errors(pb, reference).values()) <= 1e-6
+    assert max(sweeps) <= 8, sweeps

@@ -83,6 +83,10 @@ class SolverOptions:
     # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
     # fsi.condensation) or "whole" (the block as it stands)
     solid_block: str = "condensed"
+    # partitioned, solid_block "condensed": the quadrature degree of the wall's kept Jacobian (None: the residual's
+    # quadrature_degree). It only steers the wall's updates, whose fixed point is the residual's: a cheaper rule
+    # leaves the discrete solution as it is
+    wall_jacobian_quadrature_degree: int | None = None
     # partitioned: a step has converged when the bound rho / (1 - rho) ||G(x) - x|| of the sweeps' contraction says
     # every field is within newton_field_rtol of the step's solution ("contraction"), or when Newton's residual test
     # holds and the last sweep changed no field by more than newton_field_rtol ("residual")

@@ -504,11 +504,11 @@ def direction(pb, components: dict):
 
 def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
     """The partitioned strategy on MonolithicFSI `pb` (a coupled scene, monolithic mesh motion) with the residual's
-    terms `whole` and `terms`(dx) (the same terms with another cell measure). The urine's rows: the residual but the
+    terms `whole` and `terms`(dx, ds) (the same terms with other measures). The urine's rows: the residual but the
     solids' volume terms, differentiated in the velocity and pressure directions. The wall's rows (solid_block
     "condensed"): the residual over the solid cells and the urine cells touching them (`terms`(dx) with that
     measure), differentiated along the kinematic direction (dv = (b0/dt) du, du, d pi, dp: fsi.condensation), and the
-    solids' mass matrix."""
+    solids' mass matrix. The wall's Jacobian integrates with wall_jacobian_quadrature_degree where it is set."""
     own = pb.options.jacobian_sparsity == "couplings"
     R_flow = whole.urine + whole.loads
     urine = direction(pb, {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})
@@ -527,11 +527,19 @@ def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
         dxw = ufl.Measure("dx", domain=pb.mesh, subdomain_data=wall_tags, metadata=pb.dx.metadata())
         w = terms(dxw)
         R_wall = w.urine + w.solids + w.loads
+        degree = pb.options.wall_jacobian_quadrature_degree
+        if degree is None:
+            J_wall = R_wall
+        else:
+            md = {"quadrature_degree": int(degree)}
+            jw = terms(ufl.Measure("dx", domain=pb.mesh, subdomain_data=wall_tags, metadata=md),
+                       ufl.Measure("ds", domain=pb.mesh, subdomain_data=pb.ds.subdomain_data(), metadata=md))
+            J_wall = jw.urine + jw.solids + jw.loads
         others = {n: (lambda f, n=n: f[n]) for n in ("displacement", "pressure", "solid_pressure")
                   if n in pb.field_names}
         velocity = direction(pb, {"velocity": lambda f: f["displacement"]})
-        wall_jacobian = fem.form(pb.bdf[0] / pb.dt * ufl.derivative(R_wall, pb.x, velocity)
-                                 + ufl.derivative(R_wall, pb.x, direction(pb, others)))
+        wall_jacobian = fem.form(pb.bdf[0] / pb.dt * ufl.derivative(J_wall, pb.x, velocity)
+                                 + ufl.derivative(J_wall, pb.x, direction(pb, others)))
         v_trial = ufl.split(ufl.TrialFunction(pb.W))[pb.index["velocity"]]
         psi = ufl.split(ufl.TestFunction(pb.W))[pb.index["displacement"]]
         mass_form = fem.form(forms.kinematic_mass(pb.ops, pb.scene, v_trial, psi, dxw))

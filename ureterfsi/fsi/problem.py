@@ -133,7 +133,7 @@ class MonolithicFSI:
         self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
 
         # --- residual -----------------------------------------------------------------------
-        def terms(dx):
+        def terms(dx, ds=ds):
             return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds)
 
         whole = terms(dx)

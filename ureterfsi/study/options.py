@@ -43,7 +43,8 @@ def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:
                          block_iterations=s["block_iterations"],
                          block_reuse_contraction=s["block_reuse_contraction"],
                          block_refresh_sweeps=s["block_refresh_sweeps"], solid_block=s["solid_block"],
-                         sweep_convergence=s["sweep_convergence"])
+                         sweep_convergence=s["sweep_convergence"],
+                         wall_jacobian_quadrature_degree=s["wall_jacobian_quadrature_degree"])
 
 
 def time_settings(cfg: dict, spec: RunSpec, checkpoint_path: str | None, fidelity: str = "fully_coupled",
