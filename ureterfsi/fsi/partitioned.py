@@ -268,11 +268,6 @@ class PartitionedCoupling:
             if not math.isfinite(norm):
                 vec.restoreSubVector(index, rb)
                 raise NewtonDivergence(f"non-finite residual in the {name} block", [norm])
-            if self.condensed and name == "solid" and self.keep_kinematics(rb):
-                vec.restoreSubVector(index, rb)         # the corrected velocities load the wall's other rows
-                vec = self.block_residual(name)
-                rb = vec.getSubVector(index)
-                norm = rb.norm()
             if not self._current(name) or stale_factor(norm, previous, o) or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()
@@ -344,9 +339,12 @@ class PartitionedCoupling:
     def keep_kinematics(self, rb: PETSc.Vec) -> bool:
         """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
         velocities += M^-1 r_U of the solid split's residual `rb`. The condensed wall solve keeps these rows but
-        cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs before each
-        condensed solve: after the extrapolated guess of a step, and after a mixing that used other steps'
-        differences. Returns whether it corrected."""
+        cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs at a step's
+        start (hold_kinematics, after the extrapolated guess); the sweeps keep them: a condensed solve does, and
+        Anderson's mixing is G(x_k) plus differences of sweeps made at the same b0/dt (kept ones are forgotten at
+        another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An accepted state
+        is checked (_check_accepted). One Cholesky solve with M, ~0.6 of a condensed solve's cost. Returns whether
+        it corrected."""
         pb, factor = self.pb, self.factors["solid"]
         y = factor.kinematic_correction(rb)
         if self._largest(y) <= pb.options.newton_increment_floor:
@@ -420,9 +418,9 @@ class PartitionedCoupling:
         return math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0), True
 
     def _check_accepted(self, r: float, sweeps: int, history: list) -> None:
-        """A fixed point of the sweeps solves every row a block solves; the contraction test sees nothing else.
-        Refuse an accepted state whose residual is not finite or whose kinematic rows (outside the condensed wall's
-        solve) do not hold."""
+        """A fixed point of the sweeps solves every row a block solves; the contraction test sees nothing else, the
+        residual test hardly the kinematic rows. Refuse an accepted state whose residual is not finite or whose
+        kinematic rows (outside the condensed wall's solve) do not hold."""
         if not math.isfinite(r):
             raise NewtonDivergence(f"non-finite residual after {sweeps} sweeps", history)
         if self.condensed:
@@ -465,8 +463,7 @@ class PartitionedCoupling:
             if done:
                 if not assembled:
                     history.append(pb._assemble_residual())     # the accepted state's: the record, the reaction
-                if o.sweep_convergence == "contraction":
-                    self._check_accepted(history[-1], sweep + 1, history)
+                self._check_accepted(history[-1], sweep + 1, history)
                 self.contraction = self.step_contraction
                 self._keep(xs, gs)
                 due = self.schedule.converged(sweep + 1)
