@@ -343,3 +343,5 @@ def test_a_cheaper_wall_jacobian_keeps_the_solution(reference):
                           **TOL)
     assert max(field_errors(pb, reference).values()) <= 1e-6
     assert max(sweeps) <= 8, sweeps
+    with pytest.raises(ValueError, match="wall_jacobian_quadrature_degree"):
+        tube_problem(options=SolverOptions(coupling_scheme="partitioned", wall_jacobian_quadrature_degree=0, **TOL))

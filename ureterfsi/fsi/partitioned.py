@@ -525,6 +525,8 @@ def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
         w = terms(dxw)
         R_wall = w.urine + w.solids + w.loads
         degree = pb.options.wall_jacobian_quadrature_degree
+        if degree is not None and int(degree) < 1:
+            raise ValueError(f"wall_jacobian_quadrature_degree: an integer >= 1 or None, got {degree!r}")
         if degree is None:
             J_wall = R_wall
         else:

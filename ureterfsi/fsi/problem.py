@@ -261,7 +261,7 @@ class MonolithicFSI:
 
     def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
         """The partitioned strategy (fsi.partitioned.partitioned_coupling) on the residual's terms `whole` and
-        `terms`(dx), the same terms with another cell measure."""
+        `terms`(dx, ds), the same terms with other measures."""
         if self.segregated or not self.fluid_tags or not self.solid_tags:
             raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
                              "mesh_motion_coupling 'monolithic'")
