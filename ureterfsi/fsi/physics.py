@@ -57,16 +57,22 @@ def open_boundary_residual(ops, fluid: NewtonianFluid, normal_stress, backflow, 
     return form * ops.weight * ds
 
 
-def mooney_rivlin_isochoric_energy(ops, mat: MooneyRivlin, F):
-    """W_iso(I1b, I2b) of the five-parameter Mooney-Rivlin law (paper eq. 19, without the volumetric term)."""
+def invariants(ops, F):
+    """(C, J, I1, I2) of F: C = F^T F, J = det F, I1 = tr C, I2 = (I1^2 - tr C^2)/2, the 3D invariants in plane
+    strain too (C = diag(C_2D, 1): F_33 = 1, so J is unchanged; the 2D traces alone give I1b - 3 = -1 and a constant
+    I2b at rest, a prestress with c01 inert)."""
     C = F.T * F
-    J = ufl.det(F)
     I1 = ufl.tr(C)
     I2 = 0.5 * (I1**2 - ufl.tr(C * C))
     if ops.dim == 2:
-        # plane strain: the invariants of the 3D C = diag(C_2D, 1) (F_33 = 1, so J is unchanged);
-        # the 2D traces alone give I1b - 3 = -1 and a constant I2b at rest (prestress, c01 inert)
         I1, I2 = I1 + 1.0, I2 + ufl.tr(C)
+    return C, ufl.det(F), I1, I2
+
+
+def mooney_rivlin_isochoric_energy(ops, mat: MooneyRivlin, F):
+    """W_iso(I1b, I2b) of the five-parameter Mooney-Rivlin law (paper eq. 19, without the volumetric term),
+    I1b = J^(-2/3) I1 - 3, I2b = J^(-4/3) I2 - 3."""
+    _, J, I1, I2 = invariants(ops, F)
     I1b = J ** (-2.0 / 3.0) * I1 - 3.0
     I2b = J ** (-4.0 / 3.0) * I2 - 3.0
     return (mat.c10 * I1b + mat.c01 * I2b + mat.c20 * I1b**2 + mat.c02 * I2b**2 + mat.c11 * I1b * I2b)
@@ -79,13 +85,8 @@ def mooney_rivlin_first_piola(ops, mat: MooneyRivlin, u, pi):
         dW_iso/dF = W1 J^(-2/3) (2F - 2/3 I1 F^-T) + W2 J^(-4/3) (2(I1 F - F C) - 4/3 I2 F^-T),
     the energy's derivative (tests/test_physics_blocks.py) at a quarter of its kernel's cost."""
     F = deformation_gradient(ops, u)
-    C = F.T * F
-    J = ufl.det(F)
+    C, J, I1, I2 = invariants(ops, F)
     F_invT = ufl.inv(F).T
-    I1 = ufl.tr(C)
-    I2 = 0.5 * (I1**2 - ufl.tr(C * C))
-    if ops.dim == 2:
-        I1, I2 = I1 + 1.0, I2 + ufl.tr(C)      # plane strain: the 3D invariants (mooney_rivlin_isochoric_energy)
     j1, j2 = J ** (-2.0 / 3.0), J ** (-4.0 / 3.0)
     I1b, I2b = j1 * I1 - 3.0, j2 * I2 - 3.0
     W1 = mat.c10 + 2.0 * mat.c20 * I1b + mat.c11 * I2b
