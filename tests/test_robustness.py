@@ -198,6 +198,33 @@ def test_a_killed_partitioned_solve_resumes_from_its_checkpoint(tmp_path):
         assert _rel(series, obs.records[key]) < 1e-5, key
 
 
+def test_the_forms_bdf_history_follows_every_change_of_the_history_or_the_step():
+    """The forms read the history part of the BDF derivative, b1 x_n + b2 x_nm1, from one coefficient: it holds
+    after a steady solve (0), after steps of changing dt (variable BDF2 weights), after a restored state and
+    around the reaction's re-assembly (which swaps the step's own history in and out)."""
+    pb, _ = tube_problem()
+
+    def history_holds():
+        b1, b2 = (float(c.value) for c in pb.bdf[1:])
+        expected = b1 * pb.x_n.x.array + b2 * pb.x_nm1.x.array
+        assert np.abs(pb.history.x.array - expected).max() <= 1e-14 * max(np.abs(expected).max(), 1.0)
+
+    pb.solve_steady()
+    history_holds()
+    assert not pb.history.x.array.any()
+    state = None
+    for dt in (DT, DT, DT / 2):
+        pb.step(dt)
+        history_holds()
+        state = state or pb.state()
+    pb.set_state(state)
+    history_holds()
+    pb.assemble_reaction(pb.b.duplicate())
+    history_holds()
+    pb.step(DT)
+    history_holds()
+
+
 def test_checkpoint_of_a_different_problem_size_is_set_aside(tmp_path, caplog):
     pb, obs, integ = _run(tmp_path / "ckpt.npz", end=3 * DT)
     integ.run()

@@ -117,9 +117,9 @@ class CondensedSolidFactor:
         xa[self.v_pos] = self.rate * dxR[self.paired_in_r]
         return ""
 
-    def kinematic_correction(self, b: PETSc.Vec) -> np.ndarray:
-        """M^-1 r_U of the block's residual b (the solid split's layout): added to the paired velocities, it makes
-        the kinematic rows hold (r_U = M (b0/dt u + ... - v))."""
-        self.rhs_u.array[:] = b.array_r[self.u_pos]
+    def kinematic_correction(self, b: np.ndarray) -> np.ndarray:
+        """M^-1 r_U of the block's residual b (the solid split's owned entries): added to the paired velocities, it
+        makes the kinematic rows hold (r_U = M (b0/dt u + ... - v))."""
+        self.rhs_u.array[:] = b[self.u_pos]
         self.mass_ksp.solve(self.rhs_u, self.y)
         return self.y.array_r.copy()

@@ -147,6 +147,7 @@ class PartitionedCoupling:
             raise ValueError(f"coupling_scheme 'partitioned' needs non-empty splits {ORDER} (a scene with a fluid and "
                              f"a solid region), got sizes {sizes}")
         self.index = pb.layout.split_is(splits)
+        self.splits = splits                    # {name: owned local dofs}: a block's entries, gathered by numpy
         self.solid_split = splits["solid"]
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
@@ -171,11 +172,9 @@ class PartitionedCoupling:
         self._row_vectors = {"flow": pb.b.duplicate(), "mesh": pb.bm.duplicate()}
         if self.condensed:
             self._row_vectors["solid"] = pb.b.duplicate()
-        self.work = {}
-        for n in ORDER:
-            sub = pb.x.vector.getSubVector(self.index[n])
-            self.work[n] = sub.duplicate()
-            pb.x.vector.restoreSubVector(self.index[n], sub)
+        # a block's increment and rows in its own layout (VecGetSubVector would build a scatter at every call)
+        self.work = {n: PETSc.Vec().createMPI((len(splits[n]), PETSc.DECIDE), comm=pb.comm) for n in ORDER}
+        self.rows = {n: self.work[n].duplicate() for n in ORDER}
         self.field_increments = {}      # {field: (||dx_f||_inf, ||x_f||_inf)} of the last sweep's change
         self.kept = []                          # Anderson's differences (dx, dG) kept from earlier steps, newest first
         self.kept_rate = math.nan               # and the b0/dt they were made at
@@ -258,30 +257,26 @@ class PartitionedCoupling:
         """Modified Newton on the rows of split `name` from the current state (at most block_iterations updates, one
         for the linear mesh block); `assembled`: the whole residual at the current state is in problem.b."""
         pb, o = self.pb, self.pb.options
-        index, dx = self.index[name], self.work[name]
+        dofs, dx, rb = self.splits[name], self.work[name], self.rows[name]
         iterations = 1 if name == "mesh" else self.block_iterations
         previous = None
         for k in range(iterations):
             vec = pb.b if assembled else self.block_residual(name)
             assembled = False
-            rb = vec.getSubVector(index)
+            rb.array[:] = vec.array_r[dofs]
             norm = rb.norm()
             if not math.isfinite(norm):
-                vec.restoreSubVector(index, rb)
                 raise NewtonDivergence(f"non-finite residual in the {name} block", [norm])
             if not self._current(name) or stale_factor(norm, previous, o) or not o.reuse_jacobian:
                 self.refresh(name)
             t0 = time.perf_counter()
             failed = self.factors[name].solve(rb, dx)
-            vec.restoreSubVector(index, rb)
             if failed:
                 self.invalidate()
                 raise NewtonDivergence(f"{name} block: {failed}", [norm])
             pb.timings[f"{name}_solve"] += time.perf_counter() - t0
             pb.counters[f"{name}_solves"] += 1
-            xb = pb.x.vector.getSubVector(index)
-            xb.axpy(-1.0, dx)
-            pb.x.vector.restoreSubVector(index, xb)
+            pb.x.x.array[dofs] -= dx.array_r
             pb.x.x.scatter_forward()
             previous = norm
             increments = measure_field_increments(dx.array_r, dx.array_r, self.positions[name], pb.comm)
@@ -337,22 +332,20 @@ class PartitionedCoupling:
         pb.x.x.array[self.solid_split[factor.v_pos]] = pb.time_derivative(self.solid_split[factor.u_pos])
         pb.x.x.scatter_forward()
 
-    def keep_kinematics(self, rb: PETSc.Vec) -> bool:
+    def keep_kinematics(self, rb: np.ndarray) -> bool:
         """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
-        velocities += M^-1 r_U of the solid split's residual `rb`. The condensed wall solve keeps these rows but
-        cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs at a step's
-        start (hold_kinematics, after the extrapolated guess); the sweeps keep them: a condensed solve does, and
-        Anderson's mixing is G(x_k) plus differences of sweeps made at the same b0/dt (kept ones are forgotten at
-        another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An accepted state
-        is checked (_check_accepted). One Cholesky solve with M, ~0.6 of a condensed solve's cost. Returns whether
-        it corrected."""
+        velocities += M^-1 r_U of the solid split's residual `rb` (its owned entries). The condensed wall solve keeps
+        these rows but cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs
+        at a step's start (hold_kinematics, after the extrapolated guess); the sweeps keep them: a condensed solve does,
+        and Anderson's mixing is G(x_k) plus differences of sweeps made at the same b0/dt (kept ones are forgotten at
+        another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An accepted state is
+        checked (_check_accepted). One Cholesky solve with M, ~0.6 of a condensed solve's cost. Returns whether it
+        corrected."""
         pb, factor = self.pb, self.factors["solid"]
         y = self._kinematic_correction(rb)
         if self._largest(y) <= pb.options.newton_increment_floor:
             return False
-        xb = pb.x.vector.getSubVector(self.index["solid"])
-        xb.array[factor.v_pos] += y
-        pb.x.vector.restoreSubVector(self.index["solid"], xb)
+        pb.x.x.array[self.solid_split[factor.v_pos]] += y
         pb.x.x.scatter_forward()
         pb.counters["kinematic_corrections"] += 1
         return True
@@ -363,12 +356,9 @@ class PartitionedCoupling:
     def kinematic_defect(self) -> float:
         """max |M^-1 r_U| of the whole residual in problem.b: how far the solids' kinematic rows, which no condensed
         wall solve restores, are from holding (m/s)."""
-        rb = self.pb.b.getSubVector(self.index["solid"])
-        y = self._kinematic_correction(rb)
-        self.pb.b.restoreSubVector(self.index["solid"], rb)
-        return self._largest(y)
+        return self._largest(self._kinematic_correction(self.pb.b.array_r[self.solid_split]))
 
-    def _kinematic_correction(self, rb: PETSc.Vec) -> np.ndarray:
+    def _kinematic_correction(self, rb: np.ndarray) -> np.ndarray:
         """M^-1 r_U of the solid split's residual `rb` (CondensedSolidFactor.kinematic_correction), timed."""
         t0 = time.perf_counter()
         y = self.factors["solid"].kinematic_correction(rb)
@@ -379,9 +369,7 @@ class PartitionedCoupling:
         """keep_kinematics on the whole residual in problem.b; returns the residual norm after (re-assembled if it
         corrected)."""
         pb = self.pb
-        rb = pb.b.getSubVector(self.index["solid"])
-        corrected = self.keep_kinematics(rb)
-        pb.b.restoreSubVector(self.index["solid"], rb)
+        corrected = self.keep_kinematics(pb.b.array_r[self.solid_split])
         return pb._assemble_residual() if corrected else pb.b.norm()
 
     def _fields_off(self, rtol: float | None) -> dict:

@@ -101,22 +101,25 @@ class MonolithicFSI:
         self.x_n = fem.Function(W)
         self.x_nm1 = fem.Function(W)
         self._x_nm2 = np.zeros_like(self.x_nm1.x.array)   # x_nm1 of the last accepted step
+        # b1 x_n + b2 x_nm1, the history's part of the BDF derivative: the forms' one history coefficient (each
+        # mixed-space coefficient costs every assembly its packing and evaluation); kept by _sync_history
+        self.history = fem.Function(W, name="bdf_history")
         self.x_dot = fem.Function(W, name="time_derivative")   # BDF d/dt of the last accepted step
         self.t = fem.Constant(mesh, 0.0)
         self.dt = fem.Constant(mesh, 1.0)
         self.bdf = [fem.Constant(mesh, 0.0) for _ in range(3)]   # d/dt a = (b0 a + b1 a_n + b2 a_nm1)/dt
+        b0 = self.bdf[0]
         self.time = 0.0
         self.dt_prev = None
         self.dt_prev2 = None       # the step before dt_prev (quadratic predictor)
 
-        X, Xn, Xnm1 = self.split(self.x), self.split(self.x_n), self.split(self.x_nm1)
+        X, H = self.split(self.x), self.split(self.history)
         tests = self.split(ufl.TestFunction(W))
         v, u = X["velocity"], X["displacement"]
         phi, psi = tests["velocity"], tests["displacement"]
 
         def ddt(name):
-            b0, b1, b2 = self.bdf
-            return (b0 * X[name] + b1 * Xn[name] + b2 * Xnm1[name]) / self.dt
+            return (b0 * X[name] + H[name]) / self.dt
 
         dvdt, dudt = ddt("velocity"), ddt("displacement")
         if self.segregated:
@@ -124,9 +127,8 @@ class MonolithicFSI:
             # the displacement unknowns, which mirror it through a Dirichlet condition on every dof
             self.mesh_space, self._mesh_dofs = self.sub("displacement").collapse()
             self.mesh_displacement = fem.Function(self.mesh_space, name="mesh_displacement")
-            b0, b1, b2 = self.bdf
             u = self.mesh_displacement
-            dudt = (b0 * u + b1 * Xn["displacement"] + b2 * Xnm1["displacement"]) / self.dt
+            dudt = (b0 * u + H["displacement"]) / self.dt
         self._dudt = dudt
         md = {"quadrature_degree": opts.quadrature_degree}
         self.dx = dx = ufl.Measure("dx", domain=mesh, subdomain_data=scene.cell_tags, metadata=md)
@@ -440,6 +442,13 @@ class MonolithicFSI:
         for const, val in zip(self.bdf, c):
             const.value = val
         self.dt.value = dt
+        self._sync_history()
+
+    def _sync_history(self) -> None:
+        """history = b1 x_n + b2 x_nm1 (ghosts included), after each change of the BDF coefficients or x_n, x_nm1."""
+        b1, b2 = float(self.bdf[1].value), float(self.bdf[2].value)
+        np.multiply(b1, self.x_n.x.array, out=self.history.x.array)
+        self.history.x.array[:] += b2 * self.x_nm1.x.array
 
     def step(self, dt):
         """Advance from self.time by dt. On failure the state is restored and NewtonDivergence raised."""
@@ -469,6 +478,7 @@ class MonolithicFSI:
         self._x_nm2[:] = self.x_nm1.x.array     # the step's own history, for assemble_reaction
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
+        self._sync_history()
         self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
         self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
         return its, history
@@ -517,6 +527,7 @@ class MonolithicFSI:
         for key, array in (("x", self.x.x.array), ("x_n", self.x_n.x.array), ("x_nm1", self.x_nm1.x.array),
                            ("x_nm2", self._x_nm2)):
             array[:] = state[key]
+        self._sync_history()
         self.time, self.dt_prev, self.dt_prev2 = state["time"], state["dt_prev"], state["dt_prev2"]
         self.t.value = self.time
         self._reaction_ready = False    # the kept residual is not of the restored state
@@ -528,6 +539,7 @@ class MonolithicFSI:
             self.time = t
         for const in self.bdf:
             const.value = 0.0
+        self._sync_history()
         self.t.value = self.time
         self.constraints.update(self.time)
         if self.segregated:
@@ -551,6 +563,7 @@ class MonolithicFSI:
             return
         shifted = self.x_n.x.array.copy(), self.x_nm1.x.array.copy()
         self.x_n.x.array[:], self.x_nm1.x.array[:] = shifted[1], self._x_nm2
+        self._sync_history()
         try:
             with vec.localForm() as loc:
                 loc.set(0.0)
@@ -558,3 +571,4 @@ class MonolithicFSI:
             vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         finally:
             self.x_n.x.array[:], self.x_nm1.x.array[:] = shifted
+            self._sync_history()
