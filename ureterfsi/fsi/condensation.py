@@ -11,8 +11,9 @@ unknowns R (everything but the paired velocities V):
 K being the derivative of the wall's rows in the kinematic direction (dv, du) = ((b0/dt) du, du), a form of its
 own (MonolithicFSI._partitioned): the displacement form of the solid's Newton system, about 60 % of the block's
 unknowns and a sparser operator whose LU is a fraction of the whole block's (docs/performance.md). The kinematic
-rows are made to hold once per step (`kinematic_correction`: v_V += M^-1 r_U, a Cholesky factor of the constant
-M); every condensed correction then keeps them (they are linear), and so does Anderson mixing (affine).
+rows hold at a step's start (the paired velocities set nodally, partitioned.PartitionedCoupling.match_kinematics);
+every condensed correction then keeps them (they are linear), and so does Anderson mixing (affine); how far a state
+is from them is M^-1 r_U (`kinematic_correction`, a Cholesky factor of the constant M).
 """
 from __future__ import annotations
 

@@ -180,7 +180,7 @@ class PartitionedCoupling:
         self.kept_rate = math.nan               # and the b0/dt they were made at
         self.contraction = 0.0                  # the sweeps' contraction estimate of the last step (error_bound)
         self.schedule = RefreshSchedule(pb.options.block_refresh_sweeps)
-        pb.counters |= ({"sweeps": 0, "kinematic_corrections": 0, "scheduled_refreshes": 0}
+        pb.counters |= ({"sweeps": 0, "scheduled_refreshes": 0}
                         | {f"{n}_solves": 0 for n in ORDER}
                         | {f"{n}_factorisations": 0 for n in ORDER})
         pb.timings |= {f"{n}_factorise": 0.0 for n in ORDER} | {f"{n}_solve": 0.0 for n in ORDER}
@@ -324,39 +324,25 @@ class PartitionedCoupling:
         self.kept = (new[::-1] + self.kept)[:o.anderson_depth * o.anderson_reuse]
 
     def match_kinematics(self) -> None:
-        """Set the paired solid velocities to the BDF derivative of their displacements,
-        v_i = du_i/dt (problem.time_derivative; v_i = 0 in a steady solve): the kinematic rows' nodal solution, which
-        an extrapolated guess breaks; done before a step's first assembly, it spares keep_kinematics' correction and
-        the re-assembly after it."""
+        """Set the paired solid velocities to the BDF derivative of their displacements, v_i = du_i/dt
+        (problem.time_derivative; v_i = 0 in a steady solve): the kinematic rows' nodal solution, which an
+        extrapolated guess breaks, done before a step's first assembly. The condensed wall solve cannot restore these
+        rows, and the residual norm hardly sees them (M ~ the wall's volume), but the sweeps keep them: a condensed
+        solve does, and Anderson's mixing is G(x_k) plus differences of sweeps made at the same b0/dt (kept ones are
+        forgotten at another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An
+        accepted state whose rows do not hold is refused (_check_accepted)."""
         pb, factor = self.pb, self.factors["solid"]
         pb.x.x.array[self.solid_split[factor.v_pos]] = pb.time_derivative(self.solid_split[factor.u_pos])
         pb.x.x.scatter_forward()
 
-    def keep_kinematics(self, rb: np.ndarray) -> bool:
-        """Make the solids' kinematic rows hold where they do not (|M^-1 r_U| > newton_increment_floor): the paired
-        velocities += M^-1 r_U of the solid split's residual `rb` (its owned entries). The condensed wall solve keeps
-        these rows but cannot restore them, and the residual norm hardly sees them (M ~ the wall's volume), so this runs
-        at a step's start (hold_kinematics, after the extrapolated guess); the sweeps keep them: a condensed solve does,
-        and Anderson's mixing is G(x_k) plus differences of sweeps made at the same b0/dt (kept ones are forgotten at
-        another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An accepted state is
-        checked (_check_accepted). One Cholesky solve with M, ~0.6 of a condensed solve's cost. Returns whether it
-        corrected."""
-        pb, factor = self.pb, self.factors["solid"]
-        y = self._kinematic_correction(rb)
-        if self._largest(y) <= pb.options.newton_increment_floor:
-            return False
-        pb.x.x.array[self.solid_split[factor.v_pos]] += y
-        pb.x.x.scatter_forward()
-        pb.counters["kinematic_corrections"] += 1
-        return True
-
     def _largest(self, values: np.ndarray) -> float:
         return self.pb.comm.allreduce(float(np.abs(values).max(initial=0.0)), op=MPI.MAX)
 
-    def kinematic_defect(self) -> float:
-        """max |M^-1 r_U| of the whole residual in problem.b: how far the solids' kinematic rows, which no condensed
-        wall solve restores, are from holding (m/s)."""
-        return self._largest(self._kinematic_correction(self.pb.b.array_r[self.solid_split]))
+    def kinematic_defect(self, rows: PETSc.Vec | None = None) -> float:
+        """max |M^-1 r_U| of the residual in `rows` (the whole residual in problem.b by default, or the wall's rows):
+        how far the solids' kinematic rows, which no condensed wall solve restores, are from holding (m/s)."""
+        rows = self.pb.b if rows is None else rows
+        return self._largest(self._kinematic_correction(rows.array_r[self.solid_split]))
 
     def _kinematic_correction(self, rb: np.ndarray) -> np.ndarray:
         """M^-1 r_U of the solid split's residual `rb` (CondensedSolidFactor.kinematic_correction), timed."""
@@ -364,13 +350,6 @@ class PartitionedCoupling:
         y = self.factors["solid"].kinematic_correction(rb)
         self.pb.timings["kinematic_check"] += time.perf_counter() - t0
         return y
-
-    def hold_kinematics(self) -> float:
-        """keep_kinematics on the whole residual in problem.b; returns the residual norm after (re-assembled if it
-        corrected)."""
-        pb = self.pb
-        corrected = self.keep_kinematics(pb.b.array_r[self.solid_split])
-        return pb._assemble_residual() if corrected else pb.b.norm()
 
     def _fields_off(self, rtol: float | None) -> dict:
         pb = self.pb
@@ -435,8 +414,6 @@ class PartitionedCoupling:
         if self.condensed:
             self.match_kinematics()
         r = r0 = pb._assemble_residual()
-        if self.condensed:
-            r = r0 = self.hold_kinematics()
         if not math.isfinite(r):
             raise NewtonDivergence("non-finite residual at the step's start", [r])
         history = [r]
