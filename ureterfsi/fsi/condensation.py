@@ -17,7 +17,11 @@ is from them is M^-1 r_U (`kinematic_correction`, a Cholesky factor of the const
 """
 from __future__ import annotations
 
+import math
+
+import basix
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from .linear_solvers import mumps_options, mumps_status
@@ -54,14 +58,42 @@ def kinematic_pairs(problem, solid_split: np.ndarray) -> tuple[np.ndarray, np.nd
     return np.searchsorted(solid_split, v[keep]), np.searchsorted(solid_split, u[keep]), mismatched
 
 
+def mass_eigenvalue_floor(problem, cells: np.ndarray) -> float:
+    """A lower bound of the smallest eigenvalue of the solids' kinematic mass matrix M = int w v . psi over the
+    local `cells` (w = 1, or 2 pi r in r-z): x^T M x = sum_K x_K^T M_K x_K >= min_K lambda_min(M_K) |x|^2 (each
+    dof lies in a cell; a principal submatrix's smallest eigenvalue is not smaller), and on an affine simplex
+    M_K >= |det J_K| min_K(w) M_ref, M_ref the reference cell's scalar mass matrix of the velocity's element (w is
+    linear in r: its minimum at a vertex). 0 (no bound) for a curved geometry or a cell that is not a simplex."""
+    mesh = problem.mesh
+    cell = mesh.ufl_cell().cellname()
+    local = math.inf
+    if mesh.geometry.cmap.degree == 1 and cell in ("triangle", "tetrahedron") and cells.size:
+        element = basix.create_element(basix.ElementFamily.P, basix.cell.string_to_type(cell),
+                                       problem.options.velocity_degree, basix.LagrangeVariant.gll_warped)
+        points, weights = basix.make_quadrature(basix.cell.string_to_type(cell), 2 * element.degree)
+        phi = element.tabulate(0, points)[0, :, :, 0]
+        reference = np.linalg.eigvalsh(phi.T @ (weights[:, None] * phi)).min()
+        tdim = mesh.topology.dim
+        nodes = mesh.geometry.x[mesh.geometry.dofmap.array.reshape(-1, tdim + 1)[cells], :tdim]
+        det = np.abs(np.linalg.det(nodes[:, 1:] - nodes[:, :1]))
+        weight = 2.0 * math.pi * nodes[:, :, 0].min(axis=1) if problem.ops.axisymmetric else 1.0
+        local = float((det * weight).min()) * reference
+    elif cells.size:
+        local = 0.0
+    bound = problem.comm.allreduce(local, op=MPI.MIN)
+    return 0.0 if not math.isfinite(bound) else max(bound, 0.0)
+
+
 class CondensedSolidFactor:
     """The interface of partitioned.BlockFactor for the solid block, condensed as in the module docstring.
     `solid_split`: the block's owned local dofs (sorted); `offset`: the global index of local dof 0; `v_pos`,
-    `u_pos`: kinematic_pairs; `mass`: a matrix on the mixed space holding M in its (U, V) entries."""
+    `u_pos`: kinematic_pairs; `mass`: a matrix on the mixed space holding M in its (U, V) entries; `mass_floor`:
+    a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none)."""
 
     def __init__(self, comm, prefix: str, workspace_percent: int, solid_split: np.ndarray, offset: int,
-                 v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat):
+                 v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat, mass_floor: float = 0.0):
         n = len(solid_split)
+        self.mass_floor = float(mass_floor)
         self.v_pos, self.u_pos = v_pos, u_pos
         self.r_pos = np.setdiff1d(np.arange(n), v_pos)
         self.q_pos = np.setdiff1d(np.arange(n), u_pos)

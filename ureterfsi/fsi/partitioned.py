@@ -41,7 +41,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import forms, sparsity
-from .condensation import CondensedSolidFactor, direct, kinematic_pairs
+from .condensation import CondensedSolidFactor, direct, kinematic_pairs, mass_eigenvalue_floor
 from .linear_solvers import SPLITS, mumps_status
 from .newton import NewtonDivergence, fields_off, measure_field_increments
 
@@ -162,7 +162,8 @@ class PartitionedCoupling:
             fem_petsc.assemble_matrix(mass, mass_form)
             mass.assemble()
             self.factors["solid"] = CondensedSolidFactor(pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"],
-                                                         pb.layout.offset, v_pos, u_pos, mass)
+                                                         pb.layout.offset, v_pos, u_pos, mass,
+                                                         mass_eigenvalue_floor(pb, pb.cells(pb.solid_tags)))
             mass.destroy()
         # {split: {field: positions in the split's local array}} for the per-field increments of a block
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
@@ -340,9 +341,17 @@ class PartitionedCoupling:
 
     def kinematic_defect(self, rows: PETSc.Vec | None = None) -> float:
         """max |M^-1 r_U| of the residual in `rows` (the whole residual in problem.b by default, or the wall's rows):
-        how far the solids' kinematic rows, which no condensed wall solve restores, are from holding (m/s)."""
-        rows = self.pb.b if rows is None else rows
-        return self._largest(self._kinematic_correction(rows.array_r[self.solid_split]))
+        how far the solids' kinematic rows, which no condensed wall solve restores, are from holding (m/s); or its
+        bound ||r_U||_2 / lambda_min(M) (the factor's mass_floor) where that is within newton_increment_floor (the
+        sweeps keep the rows to round-off: then no Cholesky solve)."""
+        pb, factor = self.pb, self.factors["solid"]
+        rb = (pb.b if rows is None else rows).array_r[self.solid_split]
+        if factor.mass_floor > 0.0:
+            r_u = rb[factor.u_pos]
+            bound = math.sqrt(pb.comm.allreduce(float(r_u @ r_u))) / factor.mass_floor
+            if bound <= pb.options.newton_increment_floor:
+                return bound
+        return self._largest(self._kinematic_correction(rb))
 
     def _kinematic_correction(self, rb: np.ndarray) -> np.ndarray:
         """M^-1 r_U of the solid split's residual `rb` (CondensedSolidFactor.kinematic_correction), timed."""
