@@ -4,15 +4,22 @@ discrete solution as Newton on the whole system. Verified on the axisymmetric Mo
 coupled case: plain sweeps contract by ~0.6 each) against a tightly converged full Newton."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
                            tube_run)
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor
+from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.partitioned import BlockFactor
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
@@ -157,14 +164,6 @@ def test_the_mass_eigenvalue_floor_is_below_the_smallest_eigenvalue():
     """The element-wise bound of the kinematic mass matrix's smallest eigenvalue (which lets an accepted state's
     kinematic check skip its Cholesky solve) is below the true one and not far: on the tube's solids (r-z, weight
     2 pi r) and on a distorted P2 tetrahedral mesh (3D, weight 1), against dense eigenvalues."""
-    from types import SimpleNamespace
-
-    import ufl
-    from dolfinx import fem, mesh as dmesh
-    from mpi4py import MPI
-
-    from ureterfsi.fsi.operators import Operators
-
     pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned"))
     factor = pb.partitioned.factors["solid"]
     true = _smallest_eigenvalue(factor.M)

@@ -148,7 +148,6 @@ class PartitionedCoupling:
                              f"a solid region), got sizes {sizes}")
         self.index = pb.layout.split_is(splits)
         self.splits = splits                    # {name: owned local dofs}: a block's entries, gathered by numpy
-        self.solid_split = splits["solid"]
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
         prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
         self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
@@ -333,7 +332,8 @@ class PartitionedCoupling:
         forgotten at another), which solve the homogeneous rows b0 du = dt dv whatever their step's history. An
         accepted state whose rows do not hold is refused (_check_accepted)."""
         pb, factor = self.pb, self.factors["solid"]
-        pb.x.x.array[self.solid_split[factor.v_pos]] = pb.time_derivative(self.solid_split[factor.u_pos])
+        solid = self.splits["solid"]
+        pb.x.x.array[solid[factor.v_pos]] = pb.time_derivative(solid[factor.u_pos])
         pb.x.x.scatter_forward()
 
     def _largest(self, values: np.ndarray) -> float:
@@ -345,7 +345,7 @@ class PartitionedCoupling:
         bound ||r_U||_2 / lambda_min(M) (the factor's mass_floor) where that is within newton_increment_floor (the
         sweeps keep the rows to round-off: then no Cholesky solve)."""
         pb, factor = self.pb, self.factors["solid"]
-        rb = (pb.b if rows is None else rows).array_r[self.solid_split]
+        rb = (pb.b if rows is None else rows).array_r[self.splits["solid"]]
         if factor.mass_floor > 0.0:
             r_u = rb[factor.u_pos]
             bound = math.sqrt(pb.comm.allreduce(float(r_u @ r_u))) / factor.mass_floor
