@@ -118,8 +118,9 @@ class MonolithicFSI:
         v, u = X["velocity"], X["displacement"]
         phi, psi = tests["velocity"], tests["displacement"]
 
-        def ddt(name):
-            return (b0 * X[name] + H[name]) / self.dt
+        def ddt(name, current=None):
+            """(b0 a + b1 a_n + b2 a_nm1) / dt of field `name`, a = `current` (default: the state's)."""
+            return (b0 * (X[name] if current is None else current) + H[name]) / self.dt
 
         dvdt, dudt = ddt("velocity"), ddt("displacement")
         if self.segregated:
@@ -128,8 +129,7 @@ class MonolithicFSI:
             self.mesh_space, self._mesh_dofs = self.sub("displacement").collapse()
             self.mesh_displacement = fem.Function(self.mesh_space, name="mesh_displacement")
             u = self.mesh_displacement
-            dudt = (b0 * u + H["displacement"]) / self.dt
-        self._dudt = dudt
+            dudt = ddt("displacement", u)
         md = {"quadrature_degree": opts.quadrature_degree}
         self.dx = dx = ufl.Measure("dx", domain=mesh, subdomain_data=scene.cell_tags, metadata=md)
         self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
