@@ -90,6 +90,43 @@ def test_the_block_rows_are_the_residuals_rows():
         assert np.abs(rows.getSubVector(index).array - whole).max() <= 1e-12 * np.abs(whole).max(), name
 
 
+@pytest.mark.parametrize("mesh_motion", ["harmonic", "elastic"])
+def test_the_mesh_rows_by_the_kept_operator_are_the_forms(mesh_motion):
+    """A linear extension's rows are its kept matrix times the state (problem.assemble_mesh_rows): the assembled
+    form's rows, the removed rows 0, at a perturbed state."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", mesh_motion=mesh_motion, **TOL))
+    rng = np.random.default_rng(3)
+    pb.x.x.array[:] += 1e-4 * rng.standard_normal(pb.x.x.array.size)
+    pb.x.x.scatter_forward()
+    rows = pb.bm.duplicate()
+    pb.assemble_mesh_rows(rows)
+    form = fem_petsc.assemble_vector(pb.mesh_form)
+    form.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    form.array[pb.constraints.mesh_rows_local] = 0.0
+    assert np.abs(form.array).max() > 0.0
+    assert np.abs(rows.array_r - form.array_r).max() <= 1e-12 * np.abs(form.array_r).max()
+
+
+@pytest.mark.parametrize("mesh_motion, decoupled", [("harmonic", True), ("elastic", False)])
+def test_the_mesh_block_is_factorised_per_component_where_it_does_not_couple_them(mesh_motion, decoupled):
+    """The harmonic extension (r-z too: the hoop term is u_r's alone) leaves the displacement's components
+    uncoupled: one LU per component; the elastic one couples them: the whole block's LU. Either solves the mesh
+    block as its whole LU does, to round-off."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", mesh_motion=mesh_motion, **TOL))
+    part = pb.partitioned
+    part.refresh("mesh")
+    factor = part.factors["mesh"]
+    assert factor.decoupled is decoupled
+    whole = BlockFactor(pb.comm, "test_mesh_whole_", 100)
+    whole.refresh(pb.mesh_motion_matrix(), part.index["mesh"], 0.0)
+    b = part.rows["mesh"].duplicate()
+    b.setRandom()
+    x, y = b.duplicate(), b.duplicate()
+    assert factor.solve(b, x) == "" and whole.solve(b, y) == ""
+    y.axpy(-1.0, x)
+    assert y.norm() <= 1e-12 * x.norm()
+
+
 def test_a_step_that_does_not_converge_names_the_fields():
     pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", newton_field_rtol=1e-12,
                                                newton_max_iterations=2, **TOL))

@@ -22,6 +22,12 @@ class DofLayout:
         """The subspace of W of field `name`."""
         return self.W.sub(self.field_names.index(name))
 
+    def components_owned(self, name: str) -> list:
+        """[owned local dofs of component c of vector field `name`] for each component c."""
+        sub = self.sub(name)
+        parts = [np.asarray(sub.sub(c).collapse()[1]) for c in range(sub.num_sub_spaces)]
+        return [dofs[dofs < self.owned_size] for dofs in parts]
+
     def index_set(self, dofs: np.ndarray) -> PETSc.IS:
         """PETSc IS of the global indices of owned local `dofs`."""
         return PETSc.IS().createGeneral((dofs + self.offset).astype(PETSc.IntType), comm=self.comm)

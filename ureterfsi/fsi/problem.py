@@ -344,16 +344,11 @@ class MonolithicFSI:
             loc.set(0.0)
         fem_petsc.assemble_vector(b, self.residual_form)
         if self.mesh_form is not None:
-            bm = self.bm
-            with bm.localForm() as loc:
-                loc.set(0.0)
-            fem_petsc.assemble_vector(bm, self.mesh_form)
-            bm.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            bm.array_w[self.constraints.mesh_rows_local] = 0.0
+            self.assemble_mesh_rows(self.bm)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.copy(self._b_free)       # the physics residual before constraints: after a converged step, the reaction
         if self.mesh_form is not None:
-            b.axpy(1.0, bm)
+            b.axpy(1.0, self.bm)
         fem_petsc.set_bc(b, self.bcs, self.x.vector, -1.0)
         self.timings["assemble_residual"] += _time.perf_counter() - t0
         return b.norm()
@@ -369,6 +364,19 @@ class MonolithicFSI:
         self._jacobian_valid = True
         self._jacobian_rate = self._rate()
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
+
+    def assemble_mesh_rows(self, out: PETSc.Vec) -> None:
+        """The mesh-motion rows R_m(x) into `out` (owned entries; the removed rows 0): A_m x for a linear extension
+        (R_m = int k Grad u : Grad psi has no source, so R_m(x) = A_m x: a product instead of an assembly), else
+        assembled from their form."""
+        if not self.options.mesh_jacobian_stiffening:
+            self.mesh_motion_matrix().mult(self.x.vector, out)
+            return
+        with out.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.assemble_vector(out, self.mesh_form)
+        out.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        out.array_w[self.constraints.mesh_rows_local] = 0.0
 
     def mesh_motion_matrix(self) -> PETSc.Mat:
         """The mesh-motion rows' Jacobian (the interface's and Dirichlet rows removed) at the current state: a linear
