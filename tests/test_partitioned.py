@@ -320,7 +320,8 @@ def test_the_contraction_stop_bounds_each_fields_distance_from_the_steps_solutio
 def test_without_a_contraction_the_stop_is_newtons_residual_test():
     """Sweeps whose secant ratio is >= 1 (only the mixing converges them) give no error bound: the contraction stop
     then asks Newton's residual test, so a state that is the solution is accepted and one that is not is not."""
-    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", newton_field_rtol=1e-6, **TOL))
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", newton_field_rtol=1e-6,
+                                               anderson_depth=0, **TOL))
     pb.solve_steady()
     part, n = pb.partitioned, pb.x.vector.getLocalSize()
     x = pb.x.x.array[:n].copy()
@@ -329,11 +330,33 @@ def test_without_a_contraction_the_stop_is_newtons_residual_test():
     assert part.error_bound(xs, gs) == np.inf
     part.field_increments = {f: (0.0, 1.0) for f in pb.field_names}     # the last sweep changed nothing
     r0 = 1e3 * pb.b.norm()
-    assert part.converged(xs, gs, r0, history=[]) == (True, True)       # the solution: the residual test holds
+    # the solution: the residual test holds (assembled, no mixing to make)
+    assert part.converged(xs, gs, r0, history=[]) == (True, True, False)
     pb.x.x.array[:n] += step
     pb.x.x.scatter_forward()
-    assert part.converged(xs, gs, r0, history=[]) == (False, True)
+    assert part.converged(xs, gs, r0, history=[]) == (False, True, False)
     assert part.error_bound(xs, [x, x]) == 0.0                          # a fixed point: nothing left to bound
+
+
+def test_the_residual_test_is_made_on_the_mixing():
+    """Sweeps of an affine contraction G(y) = x* + (y - x*)/2 along one direction: G(x_k) = x* + d/4 fails the
+    residual test, Anderson's mixing of the two sweeps is x* (a secant step is exact on such a G): the test is made
+    there and holds, the state is the mixing and problem.b holds its residual."""
+    pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", newton_field_rtol=1e-6, **TOL))
+    pb.solve_steady()
+    part, n = pb.partitioned, pb.x.vector.getLocalSize()
+    x = pb.x.x.array[:n].copy()
+    d = 1e-3 * np.random.default_rng(4).standard_normal(n)
+    xs, gs = [x + d, x + d / 2], [x + d / 2, x + d / 4]
+    part.field_increments = {f: (0.0, 1.0) for f in pb.field_names}
+    r0 = 1e3 * pb.b.norm()
+    pb.x.x.array[:n] = gs[-1]
+    pb.x.x.scatter_forward()
+    assert part.converged(xs, gs, r0, history=[]) == (True, True, True)
+    assert np.abs(pb.x.x.array[:n] - x).max() <= 1e-9 * np.abs(d).max()
+    flow = part.splits["flow"]
+    rows = part.block_residual("flow").array_r[flow]
+    assert np.abs(pb.b.array_r[flow] - rows).max() <= 1e-12 * np.abs(rows).max()
 
 
 def test_a_residual_within_the_absolute_tolerance_does_not_make_a_factor_stale():

@@ -440,20 +440,33 @@ class PartitionedCoupling:
         rho = max(self.step_contraction, self.contraction)
         return rho / (1.0 - rho) * change if rho < 1.0 else math.inf
 
-    def converged(self, xs: list, gs: list, r0: float, history: list) -> tuple[bool, bool]:
+    def mix(self, xs: list, gs: list) -> bool:
+        """Move the state to Anderson's mixing of the sweeps `xs` -> `gs` (_anderson), where there is one to make
+        (anderson_depth > 0 and two sweeps or kept differences); returns whether it did."""
+        o = self.pb.options
+        if not (o.anderson_depth and (len(xs) > 1 or self.kept)):
+            return False
+        self.pb.x.x.array[:len(xs[-1])] = self._anderson(xs, gs, self._weights())
+        self.pb.x.x.scatter_forward()
+        return True
+
+    def converged(self, xs: list, gs: list, r0: float, history: list) -> tuple[bool, bool, bool]:
         """The step's convergence test (module docstring) after a sweep: (converged, whether problem.b now holds the
-        whole residual at the current state); `history` gets the residual it assembles."""
+        whole residual at the current state, whether the state is now the sweeps' mixing); `history` gets the
+        residual it assembles. The residual test is made on the mixing (the next sweep's start, and the better
+        state): where it fails, the residual it assembled is the next sweep's first wall rows."""
         pb, o = self.pb, self.pb.options
         if o.sweep_convergence == "contraction":
             self.bound = self.error_bound(xs, gs)
             if math.isfinite(self.bound):
-                return self.bound <= (o.newton_field_rtol or o.newton_stol), False
+                return self.bound <= (o.newton_field_rtol or o.newton_stol), False, False
             # no contraction to bound the error with (rho >= 1: Anderson's mixing carries the sweeps): Newton's test
         if self._fields_off(o.newton_field_rtol):
-            return False, False
+            return False, False, False
+        mixed = self.mix(xs, gs)
         r = pb._assemble_residual()
         history.append(r)
-        return math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0), True
+        return math.isfinite(r) and (r <= o.newton_atol or r <= o.newton_rtol * r0), True, mixed
 
     def _check_accepted(self, r: float, sweeps: int, history: list) -> None:
         """A fixed point of the sweeps solves every row a block solves; the contraction test sees nothing else, the
@@ -495,7 +508,7 @@ class PartitionedCoupling:
             gs.append(pb.x.x.array[:n].copy())
             del xs[:-(max(o.anderson_depth, 1) + 1)], gs[:-(max(o.anderson_depth, 1) + 1)]
             self.field_increments = measure_field_increments(before - gs[-1], gs[-1], pb.layout.field_owned, pb.comm)
-            done, assembled = self.converged(xs, gs, r0, history)
+            done, assembled, mixed = self.converged(xs, gs, r0, history)
             if done:
                 if not assembled:
                     history.append(pb._assemble_residual())     # the accepted state's: the record, the reaction
@@ -507,9 +520,7 @@ class PartitionedCoupling:
                     self.factors[block].rate = None         # refreshed at the next step's first use
                 pb.counters["scheduled_refreshes"] += bool(due)
                 return sweep + 1, history
-            if o.anderson_depth and (len(xs) > 1 or self.kept):
-                pb.x.x.array[:n] = self._anderson(xs, gs, self._weights())
-                pb.x.x.scatter_forward()
+            if not mixed and self.mix(xs, gs):
                 assembled = False
         self.invalidate()
         off = ", ".join(f"{f} {v:.1e}" for f, v in self._fields_off(o.newton_field_rtol).items())
