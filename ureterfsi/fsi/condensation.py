@@ -10,7 +10,14 @@ unknowns R (everything but the paired velocities V):
 
 K being the derivative of the wall's rows in the kinematic direction (dv, du) = ((b0/dt) du, du), a form of its
 own (MonolithicFSI._partitioned): the displacement form of the solid's Newton system, about 60 % of the block's
-unknowns and a sparser operator whose LU is a fraction of the whole block's (docs/performance.md). The kinematic
+unknowns and a sparser operator whose LU is a fraction of the whole block's (docs/performance.md). The cell
+unknowns (a P0 field, the solid pressure pi: each row and column of K[P, P] holds one entry) are eliminated too:
+
+    K = [[A, B], [C, D]] over (R \ P, P),  D diagonal,
+    (A - B D^-1 C) dx_o = r_o - B D^-1 r_P,   dx_P = D^-1 (r_P - C dx_o),
+
+a Schur complement with A's own sparsity (a cell unknown couples only the dofs of its cell), free of the mixed
+u-pi saddle point: a smaller LU with fewer delayed pivots. The kinematic
 rows hold at a step's start (the paired velocities set nodally, partitioned.PartitionedCoupling.match_kinematics);
 every condensed correction then keeps them (they are linear), and so does Anderson mixing (affine); how far a state
 is from them is M^-1 r_U (`kinematic_correction`, a Cholesky factor of the constant M).
@@ -91,16 +98,25 @@ class CondensedSolidFactor:
     a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none)."""
 
     def __init__(self, comm, prefix: str, workspace_percent: int, solid_split: np.ndarray, offset: int,
-                 v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat, mass_floor: float = 0.0):
+                 v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat, mass_floor: float = 0.0,
+                 cell_pos: np.ndarray | None = None):
         n = len(solid_split)
         self.mass_floor = float(mass_floor)
         self.v_pos, self.u_pos = v_pos, u_pos
         self.r_pos = np.setdiff1d(np.arange(n), v_pos)
         self.q_pos = np.setdiff1d(np.arange(n), u_pos)
         self.paired_in_r = np.searchsorted(self.r_pos, u_pos)       # u_i's place among the unknowns R
+        # the cell unknowns P (positions among Q and among R) and the others
+        cell = np.zeros(n, bool)
+        cell[np.zeros(0, np.int32) if cell_pos is None else cell_pos] = True
+        self.q_cell, self.q_rest = np.flatnonzero(cell[self.q_pos]), np.flatnonzero(~cell[self.q_pos])
+        self.r_cell, self.r_rest = np.flatnonzero(cell[self.r_pos]), np.flatnonzero(~cell[self.r_pos])
+        self.eliminates_cells = comm.allreduce(len(self.r_cell)) > 0
         g = (solid_split + offset).astype(PETSc.IntType)
-        self.IV, self.IU, self.IR, self.IQ = (PETSc.IS().createGeneral(g[p], comm=comm)
-                                              for p in (v_pos, u_pos, self.r_pos, self.q_pos))
+        self.IV, self.IU, self.IR, self.IQ, self.IQo, self.IRo, self.IP = (
+            PETSc.IS().createGeneral(g[p], comm=comm)
+            for p in (v_pos, u_pos, self.r_pos, self.q_pos, self.q_pos[self.q_rest], self.r_pos[self.r_rest],
+                      self.r_pos[self.r_cell]))
         self.ksp, self.mass_ksp = (direct(comm, f"{prefix}{p}", kind, workspace_percent)
                                    for p, kind in (("", "lu"), ("mass_", "cholesky")))
         self.M = mass.createSubMatrix(self.IU, self.IV)
@@ -108,18 +124,24 @@ class CondensedSolidFactor:
         self.mass_ksp.setOperators(self.M)
         self.mass_ksp.setUp()
         self.mass_ksp.getPC().setUp()
-        self.K = None
+        self.K = None                     # the operator factorised: K, or its Schur complement A - B D^-1 C
+        self.B = self.C = self.D = self.BC = self.dinv = None
         self.rate = None
-        self.sizes = {"paired velocities": comm.allreduce(len(v_pos)), "condensed": comm.allreduce(len(self.r_pos))}
+        self.sizes = {"paired velocities": comm.allreduce(len(v_pos)), "cell unknowns": comm.allreduce(len(self.r_cell)),
+                      "condensed": comm.allreduce(len(self.r_rest))}
         self.rhs = self.dxR = None
         self.rhs_u, self.y = self.M.createVecLeft(), self.M.createVecRight()
+        self.dx = np.zeros(len(self.r_pos))
 
     def refresh(self, matrix: PETSc.Mat, index: PETSc.IS, rate: float) -> None:
         """Factorise K = matrix[Q, R] (`matrix`: the wall rows' Jacobian along the kinematic direction at b0/dt =
         `rate`); at the first, check that the kinematic rows vanish along it (else the pairing is not the form's)."""
         if self.K is None:
             self.check_kinematic_rows(matrix, rate)
-        self.K = matrix.createSubMatrix(self.IQ, self.IR, submat=self.K)
+        if self.eliminates_cells:
+            self.eliminate_cells(matrix)
+        else:
+            self.K = matrix.createSubMatrix(self.IQ, self.IR, submat=self.K)
         self.ksp.setOperators(self.K)
         self.ksp.getPC().setReusePreconditioner(False)
         self.ksp.setUp()
@@ -127,6 +149,21 @@ class CondensedSolidFactor:
         self.rate = rate
         if self.dxR is None:
             self.rhs, self.dxR = self.K.createVecLeft(), self.K.createVecRight()
+            self.cell_rhs = self.C.createVecLeft() if self.eliminates_cells else None
+
+    def eliminate_cells(self, matrix: PETSc.Mat) -> None:
+        """K = A - B D^-1 C of `matrix` (module docstring), B kept scaled as B D^-1. D is diagonal for a P0 field
+        of cell-local forms; were it not, the solve would be inexact, not wrong: the sweeps converge to the
+        residual's fixed point whatever the blocks' operators."""
+        self.K = matrix.createSubMatrix(self.IQo, self.IRo, submat=self.K)
+        self.B = matrix.createSubMatrix(self.IQo, self.IP, submat=self.B)
+        self.C = matrix.createSubMatrix(self.IP, self.IRo, submat=self.C)
+        self.D = matrix.createSubMatrix(self.IP, self.IP, submat=self.D)
+        self.dinv = self.D.getDiagonal(self.dinv)
+        self.dinv.reciprocal()
+        self.B.diagonalScale(None, self.dinv)
+        self.BC = self.B.matMult(self.C, result=self.BC)
+        self.K.axpy(-1.0, self.BC, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
     def check_kinematic_rows(self, matrix: PETSc.Mat, rate: float) -> None:
         """||matrix[U, R]|| <= KINEMATIC_RTOL (b0/dt) ||M||: along dv = (b0/dt) du the kinematic rows cancel."""
@@ -140,14 +177,28 @@ class CondensedSolidFactor:
     def solve(self, b: PETSc.Vec, x: PETSc.Vec) -> str:
         """x = J_SS^-1 b (both in the solid split's layout) for b whose kinematic rows vanish; returns why it
         failed ("" if it did not)."""
-        self.rhs.array[:] = b.array_r[self.q_pos]
+        rhs = b.array_r[self.q_pos]
+        if self.eliminates_cells:
+            r_cell = rhs[self.q_cell]
+            self.cell_rhs.array[:] = r_cell
+            self.B.mult(self.cell_rhs, self.rhs)                          # B D^-1 r_P
+            self.rhs.array[:] = rhs[self.q_rest] - self.rhs.array_r
+        else:
+            self.rhs.array[:] = rhs
         self.ksp.solve(self.rhs, self.dxR)
         reason = self.ksp.getConvergedReason()
         if reason < 0:
             return f"LU failed (PETSc KSP reason {reason}{mumps_status(self.ksp.getPC().getFactorMatrix())})"
-        xa, dxR = x.array, self.dxR.array_r
-        xa[self.r_pos] = dxR
-        xa[self.v_pos] = self.rate * dxR[self.paired_in_r]
+        dx = self.dx
+        if self.eliminates_cells:
+            dx[self.r_rest] = self.dxR.array_r
+            self.C.mult(self.dxR, self.cell_rhs)
+            dx[self.r_cell] = self.dinv.array_r * (r_cell - self.cell_rhs.array_r)
+        else:
+            dx[:] = self.dxR.array_r
+        xa = x.array
+        xa[self.r_pos] = dx
+        xa[self.v_pos] = self.rate * dx[self.paired_in_r]
         return ""
 
     def kinematic_correction(self, b: np.ndarray) -> np.ndarray:

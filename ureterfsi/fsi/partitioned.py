@@ -218,9 +218,11 @@ class PartitionedCoupling:
             mass_form, mass = wall.mass
             fem_petsc.assemble_matrix(mass, mass_form)
             mass.assemble()
-            self.factors["solid"] = CondensedSolidFactor(pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"],
-                                                         pb.layout.offset, v_pos, u_pos, mass,
-                                                         mass_eigenvalue_floor(pb, pb.cells(pb.solid_tags)))
+            pressure = pb.layout.field_owned.get("solid_pressure", np.zeros(0, np.int32))     # P0: cell unknowns
+            self.factors["solid"] = CondensedSolidFactor(
+                pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"], pb.layout.offset, v_pos, u_pos, mass,
+                mass_eigenvalue_floor(pb, pb.cells(pb.solid_tags)),
+                cell_pos=np.searchsorted(splits["solid"], np.intersect1d(splits["solid"], pressure)))
             mass.destroy()
         # {split: {field: positions in the split's local array}} for the per-field increments of a block
         self.positions = {n: {f: np.searchsorted(splits[n], np.intersect1d(splits[n], d))
