@@ -11,14 +11,13 @@ unknowns R (everything but the paired velocities V):
 K being the derivative of the wall's rows in the kinematic direction (dv, du) = ((b0/dt) du, du), a form of its
 own (MonolithicFSI._partitioned): the displacement form of the solid's Newton system, about 60 % of the block's
 unknowns and a sparser operator whose LU is a fraction of the whole block's (docs/performance.md). The cell
-unknowns (a P0 field, the solid pressure pi: each row and column of K[P, P] holds one entry) are eliminated too:
+unknowns P (a P0 field, the solid pressure pi: K[P, P] is diagonal) are eliminated too, the rows Q \ P and the
+unknowns R \ P ("o") left:
 
-    K = [[A, B], [C, D]] over (R \ P, P),  D diagonal,
-    (A - B D^-1 C) dx_o = r_o - B D^-1 r_P,   dx_P = D^-1 (r_P - C dx_o),
+    K = [[A, B], [C, D]],   (A - B D^-1 C) dx_o = r_o - B D^-1 r_P,   dx_P = D^-1 (r_P - C dx_o),
 
 a Schur complement with A's own sparsity (a cell unknown couples only the dofs of its cell), free of the mixed
-u-pi saddle point: a smaller LU with fewer delayed pivots. The kinematic
-rows hold at a step's start (the paired velocities set nodally, partitioned.PartitionedCoupling.match_kinematics);
+u-pi saddle point: a smaller LU, fewer delayed pivots (docs/performance.md). The kinematic rows hold at a step's start (the paired velocities set nodally, partitioned.PartitionedCoupling.match_kinematics);
 every condensed correction then keeps them (they are linear), and so does Anderson mixing (affine); how far a state
 is from them is M^-1 r_U (`kinematic_correction`, a Cholesky factor of the constant M).
 """
@@ -95,7 +94,8 @@ class CondensedSolidFactor:
     """The interface of partitioned.BlockFactor for the solid block, condensed as in the module docstring.
     `solid_split`: the block's owned local dofs (sorted); `offset`: the global index of local dof 0; `v_pos`,
     `u_pos`: kinematic_pairs; `mass`: a matrix on the mixed space holding M in its (U, V) entries; `mass_floor`:
-    a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none)."""
+    a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none); `cell_pos`: positions in the split of
+    the cell unknowns (P0), eliminated cell by cell."""
 
     def __init__(self, comm, prefix: str, workspace_percent: int, solid_split: np.ndarray, offset: int,
                  v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat, mass_floor: float = 0.0,
@@ -127,15 +127,16 @@ class CondensedSolidFactor:
         self.K = None                     # the operator factorised: K, or its Schur complement A - B D^-1 C
         self.B = self.C = self.D = self.BC = self.dinv = None
         self.rate = None
-        self.sizes = {"paired velocities": comm.allreduce(len(v_pos)), "cell unknowns": comm.allreduce(len(self.r_cell)),
-                      "condensed": comm.allreduce(len(self.r_rest))}
+        self.sizes = {"paired velocities": comm.allreduce(len(v_pos)),
+                      "cell unknowns": comm.allreduce(len(self.r_cell)), "condensed": comm.allreduce(len(self.r_rest))}
         self.rhs = self.dxR = None
         self.rhs_u, self.y = self.M.createVecLeft(), self.M.createVecRight()
         self.dx = np.zeros(len(self.r_pos))
 
     def refresh(self, matrix: PETSc.Mat, index: PETSc.IS, rate: float) -> None:
-        """Factorise K = matrix[Q, R] (`matrix`: the wall rows' Jacobian along the kinematic direction at b0/dt =
-        `rate`); at the first, check that the kinematic rows vanish along it (else the pairing is not the form's)."""
+        """Factorise K = matrix[Q, R], or its Schur complement over the cell unknowns (`matrix`: the wall rows'
+        Jacobian along the kinematic direction at b0/dt = `rate`); at the first, check that the kinematic rows vanish
+        along it (else the pairing is not the form's)."""
         if self.K is None:
             self.check_kinematic_rows(matrix, rate)
         if self.eliminates_cells:

@@ -367,8 +367,8 @@ class MonolithicFSI:
 
     def assemble_mesh_rows(self, out: PETSc.Vec) -> None:
         """The mesh-motion rows R_m(x) into `out` (owned entries; the removed rows 0): A_m x for a linear extension
-        (R_m = int k Grad u : Grad psi has no source, so R_m(x) = A_m x: a product instead of an assembly), else
-        assembled from their form."""
+        (harmonic or elastic, physics.mesh_motion_residual: linear in u without a source, so R_m(x) = A_m x, a
+        product instead of an assembly), else (Jacobian-stiffened) assembled from their form."""
         if not self.options.mesh_jacobian_stiffening:
             self.mesh_motion_matrix().mult(self.x.vector, out)
             return
