@@ -20,7 +20,7 @@ from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_c
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor
 from ureterfsi.fsi.operators import Operators
-from ureterfsi.fsi.partitioned import BlockFactor
+from ureterfsi.fsi.block_factors import BlockFactor
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 

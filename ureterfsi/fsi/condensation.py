@@ -91,7 +91,7 @@ def mass_eigenvalue_floor(problem, cells: np.ndarray) -> float:
 
 
 class CondensedSolidFactor:
-    """The interface of partitioned.BlockFactor for the solid block, condensed as in the module docstring.
+    """The interface of block_factors.BlockFactor for the solid block, condensed as in the module docstring.
     `solid_split`: the block's owned local dofs (sorted); `offset`: the global index of local dof 0; `v_pos`,
     `u_pos`: kinematic_pairs; `mass`: a matrix on the mixed space holding M in its (U, V) entries; `mass_floor`:
     a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none); `cell_pos`: positions in the split of
