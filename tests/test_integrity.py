@@ -365,6 +365,20 @@ def test_checkpoint_whose_field_snapshots_are_gone_is_not_resumed(tmp_path):
     assert fw.cannot_resume(state) == "" and fw.cannot_resume({"snapshots": [], "write_time": 0}) == ""
 
 
+def test_a_run_that_would_write_no_field_snapshot_is_refused_before_its_solve(cfg):
+    """A run ending before the first probe time with fields.every_steps = 0 solved to its end and then failed in
+    FieldWriter.finish: now field_writer refuses it at set-up, naming both keys."""
+    from ureterfsi.fields import field_writer
+
+    cfg["fields"] |= {"enabled": True, "every_steps": 0}
+    cfg["time"]["probe_times"] = [0.5, 1.0]
+    with pytest.raises(ValueError, match=r"no time.probe_times within the run's 0-0.3 s and fields.every_steps = 0"):
+        field_writer(cfg, "unused.nc", lambda quantities: [], 0.3, MPI.COMM_WORLD)
+    assert field_writer(cfg, "unused.nc", lambda quantities: [], 0.5, MPI.COMM_WORLD).times == [0.5]
+    cfg["fields"]["every_steps"] = 10
+    assert field_writer(cfg, "unused.nc", lambda quantities: [], 0.3, MPI.COMM_WORLD).times == []
+
+
 def test_design_figures_of_a_stent_free_study():
     """A design study of a stent-free model has no holes (dimension hole of size 0): its parameters figure
     failed with 'cannot reshape array of size 0' (xarray cannot stack an empty dimension)."""

@@ -289,9 +289,13 @@ class FieldWriter(Observer):
 
 def field_writer(cfg: dict, out_path, parts_of, end: float, comm) -> FieldWriter | None:
     """The run's FieldWriter from config `fields` (None if disabled): parts_of(quantities) builds the parts;
-    snapshots at time.probe_times within [0, end] and every fields.every_steps steps."""
+    snapshots at time.probe_times within [0, end] and every fields.every_steps steps. A run that would write none
+    is refused here, before its solve."""
     fc = cfg["fields"]
     if not fc["enabled"]:
         return None
     times = [t for t in cfg["time"]["probe_times"] if t <= end + 1e-9]
+    if not times and not fc["every_steps"]:
+        raise ValueError(f"fields: no snapshot would be written: no time.probe_times within the run's 0-{end:g} s "
+                         f"and fields.every_steps = 0 (set fields.every_steps > 0 or fields.enabled: false)")
     return FieldWriter(fields_dir(out_path), parts_of(list(fc["quantities"])), times, fc["every_steps"], comm)
