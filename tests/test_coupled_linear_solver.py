@@ -244,3 +244,37 @@ def test_solver_options_go_with_their_problem():
     gc.collect()
     assert not [k for k in PETSc.Options().getAll() if k.startswith(prefix)]
     assert set(PETSc.Options().getAll()) <= base
+
+
+def test_a_full_options_table_is_freed_of_dead_problems_or_named():
+    """Problems left in reference cycles keep their options until the cyclic collector runs; a new solver that does
+    not fit in PETSc's fixed table collects them first (the suite's partitioned tests once ran out of the 512 entries
+    within one module), and where live solvers fill it, the error names the table and what holds it."""
+    import gc
+    import weakref
+
+    from ureterfsi.fsi.linear_solvers import OPTIONS_TABLE_SIZE, forget_options, set_options
+
+    class Holder:
+        pass
+
+    gc.collect()
+    gc.disable()                    # only set_options's own collection may free the dead holder
+    try:
+        dead = Holder()
+        dead.cycle = dead
+        room = OPTIONS_TABLE_SIZE - len(PETSc.Options().getAll())
+        set_options("ureterfsi_1_", {f"k{i}": i for i in range(room - 2)})
+        weakref.finalize(dead, forget_options, "ureterfsi_1_")
+        del dead
+        set_options("ureterfsi_2_", {f"k{i}": i for i in range(5)})
+        assert not [k for k in PETSc.Options().getAll() if k.startswith("ureterfsi_1_")]
+        room = OPTIONS_TABLE_SIZE - len(PETSc.Options().getAll())
+        set_options("ureterfsi_3_", {f"k{i}": i for i in range(room)})
+        with pytest.raises(RuntimeError, match=r"options table is full \(512 of 512 entries, \d+ live problems"):
+            set_options("ureterfsi_4_", {"ksp_type": "preonly"})
+        assert not [k for k in PETSc.Options().getAll() if k.startswith("ureterfsi_4_")]
+    finally:
+        gc.enable()
+        for prefix in ("ureterfsi_1_", "ureterfsi_2_", "ureterfsi_3_"):
+            forget_options(prefix)

@@ -30,7 +30,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .linear_solvers import mumps_options, mumps_status
+from .linear_solvers import mumps_options, mumps_status, set_options
 from .sparsity import cell_dofs
 
 KINEMATIC_RTOL = 1e-10        # the condensed operator's kinematic rows vanish to this part of (b0/dt) ||M||
@@ -40,10 +40,8 @@ def direct(comm, prefix: str, kind: str, workspace_percent: int) -> PETSc.KSP:
     """A KSP applying a MUMPS factorisation (`kind` "lu" or "cholesky") of its operator."""
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
-    o = PETSc.Options()
-    for key, value in ({"ksp_type": "preonly", "pc_type": kind, "pc_factor_mat_solver_type": "mumps"}
-                       | mumps_options(workspace_percent)).items():
-        o[f"{prefix}{key}"] = value
+    set_options(prefix, {"ksp_type": "preonly", "pc_type": kind, "pc_factor_mat_solver_type": "mumps"}
+                | mumps_options(workspace_percent))
     ksp.setFromOptions()
     return ksp
 

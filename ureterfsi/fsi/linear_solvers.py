@@ -19,6 +19,7 @@ never the Newton iterate beyond the Krylov tolerance.
 """
 from __future__ import annotations
 
+import gc
 import time
 
 from petsc4py import PETSc
@@ -27,6 +28,26 @@ SPLITS = ("solid", "mesh", "flow")
 KRYLOV = ("block_gauss_seidel",)            # linear_solver values handled here
 DIRECT = ("mumps", "superlu_dist", "superlu", "umfpack")
 MUMPS_WORKSPACE_PERCENT = 20                # MUMPS's own default ICNTL(14)
+OPTIONS_TABLE_SIZE = 512                    # PETSc 3.18's options database: a fixed table per process (MAXOPTIONS)
+
+
+def set_options(prefix: str, options: dict) -> None:
+    """Write `options` under `prefix` into PETSc's options database. Where its fixed table has no room, garbage is
+    collected first: problems left in reference cycles still hold theirs until their finalizers (forget_options)
+    run; if that frees too little, a RuntimeError says how many live entries hold it."""
+    db = PETSc.Options()
+    held = db.getAll()
+    new = [k for k in options if f"{prefix}{k}" not in held]
+    if len(held) + len(new) > OPTIONS_TABLE_SIZE:
+        gc.collect()
+        held = db.getAll()
+        if len(held) + len(new) > OPTIONS_TABLE_SIZE:
+            owners = len({k.split("_")[1] for k in held if k.startswith("ureterfsi_")})
+            raise RuntimeError(f"PETSc's options table is full ({len(held)} of {OPTIONS_TABLE_SIZE} entries, "
+                               f"{owners} live problems' solvers among them): {len(new)} more under '{prefix}' "
+                               "do not fit; drop the problems no longer needed")
+    for key, value in options.items():
+        db[f"{prefix}{key}"] = value
 
 
 def forget_options(prefix: str) -> None:
@@ -129,9 +150,7 @@ class WholeSystemLU(LinearSolver):
         pc.setType("lu")
         pc.setFactorSolverType(package)
         if package == "mumps":
-            o = PETSc.Options()
-            for key, value in mumps_options(workspace_percent).items():
-                o[f"{prefix}{key}"] = value
+            set_options(prefix, mumps_options(workspace_percent))
 
     def factor_matrix(self):
         return self.ksp.getPC().getFactorMatrix()
@@ -153,9 +172,7 @@ class FlowBlockLU(LinearSolver):
                  workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
         super().__init__(ksp, counters)
         self.package = package
-        o = PETSc.Options()
-        for key, value in flow_lu_options(package, workspace_percent).items():
-            o[f"{prefix}{key}"] = value
+        set_options(prefix, flow_lu_options(package, workspace_percent))
         pc = ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*splits)
@@ -177,9 +194,7 @@ class SchurFieldsplit(LinearSolver):
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, splits: list, rtol: float, max_iterations: int, counters: dict):
         super().__init__(ksp, counters)
-        o = PETSc.Options()
-        for key, value in schur_fieldsplit_options(rtol, max_iterations).items():
-            o[f"{prefix}{key}"] = value
+        set_options(prefix, schur_fieldsplit_options(rtol, max_iterations))
         pc = ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*splits)
@@ -216,9 +231,7 @@ class BlockGaussSeidel(LinearSolver):
         if unknown:
             raise ValueError(f"BlockGaussSeidel kept blocks must be among {SPLITS}, got {sorted(unknown)}")
         self.ksp, self.kept, self.refactorise_iterations = ksp, tuple(kept), refactorise_iterations
-        o = PETSc.Options()
-        for key, value in block_gauss_seidel_options(rtol, max_iterations, workspace_percent).items():
-            o[f"{prefix}{key}"] = value
+        set_options(prefix, block_gauss_seidel_options(rtol, max_iterations, workspace_percent))
         pc = ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*[(n, splits[n]) for n in SPLITS])

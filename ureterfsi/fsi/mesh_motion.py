@@ -11,7 +11,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics
-from .linear_solvers import MUMPS_WORKSPACE_PERCENT, direct_package, mumps_options
+from .linear_solvers import MUMPS_WORKSPACE_PERCENT, direct_package, mumps_options, set_options
 
 MISMATCH_LIMIT = 0.05       # PrescribedMap: largest disagreement with the boundary motion, of the displacement
 
@@ -91,9 +91,7 @@ class Extension:
             ksp.getPC().setFactorSolverType(package)
             if package == "mumps":
                 ksp.setOptionsPrefix(prefix)
-                o = PETSc.Options()
-                for key, value in mumps_options(workspace_percent).items():
-                    o[f"{prefix}{key}"] = value
+                set_options(prefix, mumps_options(workspace_percent))
                 ksp.setFromOptions()
 
     def solve(self, t: float, guess: np.ndarray) -> None:
