@@ -33,7 +33,7 @@ from petsc4py import PETSc
 
 from ureterfsi import tags
 from ureterfsi.config import load_config_files
-from ureterfsi.fsi.linear_solvers import flow_lu_options, schur_fieldsplit_options
+from ureterfsi.fsi.linear_solvers import flow_lu_options, schur_fieldsplit_options, set_options
 from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.fsi.submesh import extract
 from ureterfsi.mesh import load_mesh
@@ -98,8 +98,7 @@ def main():
         prefix = f"bench_{name}_"
         opts = VARIANTS[name] if name.startswith("lu") else schur_fieldsplit_options(
             cfg["solver"]["krylov_rtol"], 400) | VARIANTS[name]
-        for key, value in opts.items():
-            PETSc.Options()[prefix + key] = value
+        set_options(prefix, opts)
         ksp = PETSc.KSP().create(MPI.COMM_WORLD)
         ksp.setOptionsPrefix(prefix)
         ksp.setOperators(A)

@@ -29,6 +29,12 @@ KRYLOV = ("block_gauss_seidel",)            # linear_solver values handled here
 DIRECT = ("mumps", "superlu_dist", "superlu", "umfpack")
 MUMPS_WORKSPACE_PERCENT = 20                # MUMPS's own default ICNTL(14)
 OPTIONS_TABLE_SIZE = 512                    # PETSc 3.18's options database: a fixed table per process (MAXOPTIONS)
+OWNER_PREFIX = "ureterfsi_"
+
+
+def owner_prefix(owner: object) -> str:
+    """The options prefix of one owner's solvers (a problem's): unique among the live objects."""
+    return f"{OWNER_PREFIX}{id(owner)}_"
 
 
 def set_options(prefix: str, options: dict) -> None:
@@ -42,7 +48,7 @@ def set_options(prefix: str, options: dict) -> None:
         gc.collect()
         held = db.getAll()
         if len(held) + len(new) > OPTIONS_TABLE_SIZE:
-            owners = len({k.split("_")[1] for k in held if k.startswith("ureterfsi_")})
+            owners = len({k[len(OWNER_PREFIX):].split("_")[0] for k in held if k.startswith(OWNER_PREFIX)})
             raise RuntimeError(f"PETSc's options table is full ({len(held)} of {OPTIONS_TABLE_SIZE} entries, "
                                f"{owners} live problems' solvers among them): {len(new)} more under '{prefix}' "
                                "do not fit; drop the problems no longer needed")

@@ -35,7 +35,7 @@ from .ale_jacobian import ALEJacobian
 from .constraints import Constraints
 from .dofs import DofLayout
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
-                             forget_options)
+                             forget_options, owner_prefix)
 from .materials import MooneyRivlin
 from .mesh_motion import cell_stiffness, segregated_motion
 from .newton import Newton, NewtonDivergence
@@ -155,7 +155,7 @@ class MonolithicFSI:
         # --- constraints --------------------------------------------------------------------
         # PETSc options of this problem's solvers live under one prefix, removed when the problem goes (the
         # options database holds at most 512 entries per process)
-        self.options_prefix = f"ureterfsi_{id(self)}_"
+        self.options_prefix = owner_prefix(self)
         weakref.finalize(self, forget_options, self.options_prefix).atexit = False
         self.counters = {"factorisations": 0, "reused_solves": 0}
         self.timings = {"assemble_residual": 0.0, "assemble_jacobian": 0.0, "factorise": 0.0, "solve": 0.0,
