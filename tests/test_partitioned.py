@@ -17,10 +17,11 @@ from petsc4py import PETSc
 
 from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
                            tube_run)
-from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions
+from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions, sparsity
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor
 from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.block_factors import BlockFactor
+from ureterfsi.fsi.block_jacobian import BlockJacobian
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 
@@ -159,6 +160,53 @@ def _tube_newton_system(seed):
     return pb, A, b
 
 
+def _on_W(pb, name: str) -> PETSc.Mat:
+    """Block `name`'s Jacobian form on the mixed space, assembled at the current state with the conditions into
+    the whole Jacobian's pattern (which holds every diagonal: the constrained dofs' identities)."""
+    A = sparsity.coupled_matrix(pb.W, pb.field_names, pb.cells(pb.fluid_tags), pb.solid_regions())
+    fem_petsc.assemble_matrix(A, pb.partitioned.forms[name].jacobian, bcs=pb.bcs)
+    A.assemble()
+    return A
+
+
+def _block_of(pb, name: str, A: PETSc.Mat) -> PETSc.Mat:
+    """The block `name` factorises, taken out of A on W: J[Q, R] for the condensed wall, J[F, F] for the urine."""
+    part = pb.partitioned
+    if name == "solid":
+        factor = part.factors["solid"]
+        return A.createSubMatrix(factor.IQ, factor.IR)
+    return A.createSubMatrix(part.index[name], part.index[name])
+
+
+@pytest.mark.parametrize("name", ["solid", "flow"])
+def test_a_block_jacobian_on_its_own_fields_is_its_block_on_the_mixed_space(name):
+    """The wall's and the urine's Jacobians posed on their own fields and assembled straight into their operators
+    (fsi.block_jacobian: 31 x 31 and 34 x 34 entries a cell instead of W's 65 x 65 in 3D) are, entry for entry,
+    the blocks the factors took out of the Jacobian on W: at a state away from the one of the first refresh, and
+    with the constrained dofs' identities. A wrong dof map is refused by the first refresh's check."""
+    pb, _, _ = _tube_newton_system(6)
+    part = pb.partitioned
+    part.refresh(name)                                    # the first: from W, then bound and checked
+    direct = part.forms[name].direct
+    assert direct.operator is not None and part.forms[name].matrix is None
+    rows, cols = (V.dofmap.index_map.size_global for V in direct.form.function_spaces)
+    assert rows + cols < 2 * pb.unknowns
+    rng = np.random.default_rng(7)
+    pb.x.x.array[:] += 1e-5 * rng.standard_normal(pb.x.x.array.size)
+    pb.x.x.scatter_forward()
+    expected = _block_of(pb, name, _on_W(pb, name))
+    assert len(direct.identity[0]) > 0                    # the tube's constrained dofs in the block
+    part.refresh(name)                                    # a later refresh: assembled on the block's fields
+    got = direct.operator.copy()
+    got.axpy(-1.0, expected)
+    assert got.norm() <= 1e-13 * expected.norm(), (got.norm(), expected.norm())
+
+    # a wrong dof map (the test dofs shifted by one) is refused: the operator holds the block's values now
+    part.forms[name].direct = BlockJacobian(direct.form, np.roll(direct.row_to_W, 1), direct.col_to_W)
+    with pytest.raises(RuntimeError, match=f"the {name} block's Jacobian on its own fields"):
+        part.bind_direct(name)
+
+
 def test_the_condensed_solid_solve_is_the_whole_blocks():
     """Eliminating the paired solid velocities through the kinematic rows is exact: for a right-hand side whose
     kinematic rows vanish (as the sweeps keep them) the condensed LU's correction is the whole block's LU's, and
@@ -223,7 +271,7 @@ def test_the_condensation_checks_the_kinematic_pairing():
     part = pb.partitioned
     condensed = part.factors["solid"]
     part.refresh("solid")
-    matrix = part.forms["solid"].matrix
+    matrix = _on_W(pb, "solid")
     condensed.check_kinematic_rows(matrix, condensed.rate)
     B = matrix.copy()
     row = int(condensed.IU.getIndices()[0])
@@ -433,11 +481,7 @@ def test_a_cheaper_wall_jacobian_keeps_the_solution(reference):
         pb, _ = tube_problem(options=SolverOptions(coupling_scheme="partitioned", wall_jacobian_quadrature_degree=degree,
                                                    **TOL))
         pb.solve_steady()
-        wall = pb.partitioned.forms["solid"]
-        wall.matrix.zeroEntries()
-        fem_petsc.assemble_matrix(wall.matrix, wall.jacobian, bcs=pb.bcs)
-        wall.matrix.assemble()
-        matrices[degree] = wall.matrix.copy()
+        matrices[degree] = _on_W(pb, "solid")
     matrices[2].axpy(-1.0, matrices[None])
     change = matrices[2].norm() / matrices[None].norm()
     assert 1e-8 < change < 0.1, change

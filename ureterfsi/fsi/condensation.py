@@ -111,10 +111,11 @@ class CondensedSolidFactor:
         self.r_cell, self.r_rest = np.flatnonzero(cell[self.r_pos]), np.flatnonzero(~cell[self.r_pos])
         self.eliminates_cells = comm.allreduce(len(self.r_cell)) > 0
         g = (solid_split + offset).astype(PETSc.IntType)
-        self.IV, self.IU, self.IR, self.IQ, self.IQo, self.IRo, self.IP = (
-            PETSc.IS().createGeneral(g[p], comm=comm)
-            for p in (v_pos, u_pos, self.r_pos, self.q_pos, self.q_pos[self.q_rest], self.r_pos[self.r_rest],
-                      self.r_pos[self.r_cell]))
+        self.comm = comm
+        self.IV, self.IU, self.IR, self.IQ = (PETSc.IS().createGeneral(g[p], comm=comm)
+                                              for p in (v_pos, u_pos, self.r_pos, self.q_pos))
+        self.operator = None              # J[Q, R], in its own numbering (rows Q, columns R in the split's order)
+        self.IQo = self.IRo = self.IPq = self.IPr = None
         self.ksp, self.mass_ksp = (direct(comm, f"{prefix}{p}", kind, workspace_percent)
                                    for p, kind in (("", "lu"), ("mass_", "cholesky")))
         self.M = mass.createSubMatrix(self.IU, self.IV)
@@ -132,15 +133,30 @@ class CondensedSolidFactor:
         self.dx = np.zeros(len(self.r_pos))
 
     def refresh(self, matrix: PETSc.Mat, index: PETSc.IS, rate: float) -> None:
-        """Factorise K = matrix[Q, R], or its Schur complement over the cell unknowns (`matrix`: the wall rows'
-        Jacobian along the kinematic direction at b0/dt = `rate`); at the first, check that the kinematic rows vanish
-        along it (else the pairing is not the form's)."""
-        if self.K is None:
+        """Factorise K = matrix[Q, R] (the operator, kept), or its Schur complement over the cell unknowns (`matrix`:
+        the wall rows' Jacobian along the kinematic direction at b0/dt = `rate`); at the first, check that the
+        kinematic rows vanish along it (else the pairing is not the form's)."""
+        if self.operator is None:
             self.check_kinematic_rows(matrix, rate)
-        if self.eliminates_cells:
-            self.eliminate_cells(matrix)
+            self.operator = matrix.createSubMatrix(self.IQ, self.IR)
+            first_q, first_r = self.operator.getOwnershipRange()[0], self.operator.getOwnershipRangeColumn()[0]
+            self.IQo, self.IRo, self.IPq, self.IPr = (
+                PETSc.IS().createGeneral((first + p).astype(PETSc.IntType), comm=self.comm)
+                for first, p in ((first_q, self.q_rest), (first_r, self.r_rest), (first_q, self.q_cell),
+                                 (first_r, self.r_cell)))
         else:
-            self.K = matrix.createSubMatrix(self.IQ, self.IR, submat=self.K)
+            matrix.createSubMatrix(self.IQ, self.IR, submat=self.operator)
+        self.factorise(self.operator, rate)
+
+    def factorise(self, operator: PETSc.Mat, rate: float) -> None:
+        """Factorise `operator` (J[Q, R]: the one kept, with the values of refresh or of an assembly straight into it,
+        fsi.block_jacobian), or its Schur complement over the cell unknowns."""
+        if operator is not self.operator:
+            raise ValueError("the condensed factor refactorises its own operator, J[Q, R]")
+        if self.eliminates_cells:
+            self.eliminate_cells(self.operator)
+        else:
+            self.K = self.operator
         self.ksp.setOperators(self.K)
         self.ksp.getPC().setReusePreconditioner(False)
         self.ksp.setUp()
@@ -151,13 +167,13 @@ class CondensedSolidFactor:
             self.cell_rhs = self.C.createVecLeft() if self.eliminates_cells else None
 
     def eliminate_cells(self, matrix: PETSc.Mat) -> None:
-        """K = A - B D^-1 C of `matrix` (module docstring), B kept scaled as B D^-1. D is diagonal for a P0 field
-        of cell-local forms; were it not, the solve would be inexact, not wrong: the sweeps converge to the
+        """K = A - B D^-1 C of `matrix` (J[Q, R], module docstring), B kept scaled as B D^-1. D is diagonal for a P0
+        field of cell-local forms; were it not, the solve would be inexact, not wrong: the sweeps converge to the
         residual's fixed point whatever the blocks' operators."""
         self.K = matrix.createSubMatrix(self.IQo, self.IRo, submat=self.K)
-        self.B = matrix.createSubMatrix(self.IQo, self.IP, submat=self.B)
-        self.C = matrix.createSubMatrix(self.IP, self.IRo, submat=self.C)
-        self.D = matrix.createSubMatrix(self.IP, self.IP, submat=self.D)
+        self.B = matrix.createSubMatrix(self.IQo, self.IPr, submat=self.B)
+        self.C = matrix.createSubMatrix(self.IPq, self.IRo, submat=self.C)
+        self.D = matrix.createSubMatrix(self.IPq, self.IPr, submat=self.D)
         self.dinv = self.D.getDiagonal(self.dinv)
         self.dinv.reciprocal()
         self.B.diagonalScale(None, self.dinv)

@@ -42,6 +42,7 @@ from petsc4py import PETSc
 
 from . import forms, sparsity
 from .block_factors import BlockFactor, ComponentFactor
+from .block_jacobian import BlockJacobian, field_components, field_space
 from .condensation import CondensedSolidFactor, kinematic_pairs, mass_eigenvalue_floor
 from .linear_solvers import SPLITS
 from .newton import NewtonDivergence, fields_off, measure_field_increments
@@ -95,11 +96,13 @@ class RefreshSchedule:
 
 @dataclass
 class BlockForms:
-    """A block's rows (`residual`), their Jacobian in the block's directions (`jacobian`) and its matrix;
-    the wall's also the solids' mass form and its matrix (`mass`)."""
+    """A block's rows (`residual`), their Jacobian in the block's directions (`jacobian`) and its matrix on W
+    (assembled for the first refresh only, then freed); the same Jacobian on the block's own fields (`direct`,
+    fsi.block_jacobian: every later refresh); the wall's also the solids' mass form and its matrix (`mass`)."""
     residual: fem.Form
     jacobian: fem.Form
-    matrix: PETSc.Mat
+    matrix: PETSc.Mat | None
+    direct: BlockJacobian
     mass: tuple | None = None
 
 
@@ -188,22 +191,48 @@ class PartitionedCoupling:
             if kept is not None and not math.isclose(kept, rate, rel_tol=1e-12):
                 self.schedule.reset()                   # another b0/dt: another operator, another floor
             self.schedule.wall_refreshed()
-        forms = self.forms.get(name)
-        if forms is not None:
-            matrix = forms.matrix
-            matrix.zeroEntries()
-            fem_petsc.assemble_matrix(matrix, forms.jacobian, bcs=pb.bcs)
-            matrix.assemble()
+        forms, factor = self.forms.get(name), self.factors[name]
+        if forms is not None and forms.direct.operator is not None:
+            operator = forms.direct.assemble()
             pb.timings[f"assemble_{name}_jacobian"] += time.perf_counter() - t0
-        elif name == "mesh":
-            matrix = pb.mesh_motion_matrix()
+            t1 = time.perf_counter()
+            factor.factorise(operator, rate)
         else:
-            pb._assemble_jacobian()
-            matrix = pb.A
-        t1 = time.perf_counter()
-        self.factors[name].refresh(matrix, self.index[name], rate)
+            if forms is not None:
+                matrix = forms.matrix
+                matrix.zeroEntries()
+                fem_petsc.assemble_matrix(matrix, forms.jacobian, bcs=pb.bcs)
+                matrix.assemble()
+                pb.timings[f"assemble_{name}_jacobian"] += time.perf_counter() - t0
+            elif name == "mesh":
+                matrix = pb.mesh_motion_matrix()
+            else:
+                pb._assemble_jacobian()
+                matrix = pb.A
+            t1 = time.perf_counter()
+            factor.refresh(matrix, self.index[name], rate)
+            if forms is not None:
+                self.bind_direct(name)
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
+
+    def bind_direct(self, name: str) -> None:
+        """After the first refresh of block `name` from its Jacobian on W: its later ones assemble the block's own
+        Jacobian (fsi.block_jacobian) straight into the operator just extracted, checked here against it; the
+        matrix on W is freed."""
+        pb, forms, factor = self.pb, self.forms[name], self.factors[name]
+        constrained = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in pb.bcs])
+        split = self.splits[name]
+        if name == "solid":
+            operator, rows, cols = factor.operator, factor.q_pos, factor.r_pos
+        else:
+            operator, rows = factor.block, np.arange(len(split))
+            cols = rows
+        forms.direct.bind(pb, operator, split, rows, cols, constrained)
+        forms.direct.check(name)
+        if forms.matrix is not None:
+            forms.matrix.destroy()
+            forms.matrix = None
 
     def _current(self, name: str) -> bool:
         rate = self.factors[name].rate
@@ -453,19 +482,32 @@ class PartitionedCoupling:
 
 
 # --- the blocks' forms ----------------------------------------------------------------------
-def direction(pb, components: dict):
-    """A direction in W for ufl.derivative: {field: its components as a function of {field: components of the
-    trial function}} (other fields 0)."""
-    trial, parts, offset = ufl.TrialFunction(pb.W), [], 0
-    fields = {}
-    for name, element in zip(pb.field_names, pb.W.ufl_element().sub_elements()):
-        n = element.value_size()
-        fields[name] = [trial[offset + i] for i in range(n)]
-        offset += n
+def direction(pb, components: dict, fields: dict | None = None):
+    """A direction in W for ufl.derivative (or a test function's place in W): {field: its components as a function
+    of `fields`} (other fields 0); `fields`: {field: components} of an argument, W's trial function's by default."""
+    if fields is None:
+        trial, offset, fields = ufl.TrialFunction(pb.W), 0, {}
+        for name, element in zip(pb.field_names, pb.W.ufl_element().sub_elements()):
+            n = element.value_size()
+            fields[name] = [trial[offset + i] for i in range(n)]
+            offset += n
+    parts = []
     for name in pb.field_names:
         expr = components.get(name)
-        parts += (list(expr(fields)) if expr is not None else [ufl.as_ufl(0.0)] * len(fields[name]))
+        size = pb.W.ufl_element().sub_elements()[pb.index[name]].value_size()
+        parts += (list(expr(fields)) if expr is not None else [ufl.as_ufl(0.0)] * size)
     return ufl.as_vector(parts)
+
+
+def direct_jacobian(pb, rows: list, cols: list, jacobian) -> BlockJacobian:
+    """The block Jacobian `jacobian`(trial) (a form on W along a direction in W made of `trial`, {field:
+    components}) posed on the fields `rows` (test) and `cols` (trial) alone (fsi.block_jacobian)."""
+    V_rows, row_to_W = field_space(pb.W, pb.field_names, rows)
+    V_cols, col_to_W = field_space(pb.W, pb.field_names, cols)
+    test = direction(pb, {n: (lambda f, n=n: f[n]) for n in rows},
+                     field_components(V_rows, rows, ufl.TestFunction))
+    form = ufl.replace(jacobian(field_components(V_cols, cols, ufl.TrialFunction)), {ufl.TestFunction(pb.W): test})
+    return BlockJacobian(fem.form(form), row_to_W, col_to_W)
 
 
 def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
@@ -477,11 +519,13 @@ def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
     solids' mass matrix. The wall's Jacobian integrates with wall_jacobian_quadrature_degree where it is set."""
     own = pb.options.jacobian_sparsity == "couplings"
     R_flow = whole.urine + whole.loads
-    urine = direction(pb, {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]})
-    flow_jacobian = fem.form(ufl.derivative(R_flow, pb.x, urine))
+    flow_fields = {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]}
+    flow_jacobian = fem.form(ufl.derivative(R_flow, pb.x, direction(pb, flow_fields)))
     flow = BlockForms(fem.form(R_flow), flow_jacobian,
                       sparsity.coupled_matrix(pb.W, pb.field_names, pb.cells(pb.fluid_tags), [], part="flow")
-                      if own else fem_petsc.create_matrix(flow_jacobian))
+                      if own else fem_petsc.create_matrix(flow_jacobian),
+                      direct_jacobian(pb, ["velocity", "pressure"], ["velocity", "pressure"],
+                                      lambda trial: ufl.derivative(R_flow, pb.x, direction(pb, flow_fields, trial))))
     splits = pb.layout.coupled_splits(pb.cells(pb.solid_tags), pb.constraints.pins, pb.constraints.dirichlet)
     wall = None
     if pb.options.solid_block == "condensed":
@@ -505,16 +549,26 @@ def partitioned_coupling(pb, whole, terms) -> "PartitionedCoupling":
             J_wall = jw.urine + jw.solids + jw.loads
         others = {n: (lambda f, n=n: f[n]) for n in ("displacement", "pressure", "solid_pressure")
                   if n in pb.field_names}
-        velocity = direction(pb, {"velocity": lambda f: f["displacement"]})
-        wall_jacobian = fem.form(pb.bdf[0] / pb.dt * ufl.derivative(J_wall, pb.x, velocity)
-                                 + ufl.derivative(J_wall, pb.x, direction(pb, others)))
+
+        def along_kinematics(trial=None):
+            """The wall's Jacobian along dv = (b0/dt) du (trial: {field: components}, W's by default)."""
+            velocity = direction(pb, {"velocity": lambda f: f["displacement"]}, trial)
+            along = {n: d for n, d in others.items() if trial is None or n in trial}
+            return (pb.bdf[0] / pb.dt * ufl.derivative(J_wall, pb.x, velocity)
+                    + ufl.derivative(J_wall, pb.x, direction(pb, along, trial)))
+
+        wall_jacobian = fem.form(along_kinematics())
+        # the condensed operator's rows and columns: K = J[Q, R] (fsi.condensation); the fluid pressures among
+        # them are the pinned ones (identities), so the pressure is neither a row nor a column field
+        pi = ["solid_pressure"] if "solid_pressure" in pb.field_names else []
+        direct = direct_jacobian(pb, ["velocity"] + pi, ["displacement"] + pi, along_kinematics)
         v_trial = ufl.split(ufl.TrialFunction(pb.W))[pb.index["velocity"]]
         psi = ufl.split(ufl.TestFunction(pb.W))[pb.index["displacement"]]
         mass_form = fem.form(forms.kinematic_mass(pb.ops, pb.scene, v_trial, psi, dxw))
         solid_cells = pb.cells(pb.solid_tags)
         wall = BlockForms(fem.form(R_wall), wall_jacobian,
                           sparsity.coupled_matrix(pb.W, pb.field_names, urine_cells, pb.solid_regions(),
-                                                  part="wall"),
+                                                  part="wall"), direct,
                           mass=(mass_form, sparsity.pattern_matrix(
                               pb.W, pb.field_names, [(solid_cells, ["displacement"], ["velocity"])],
                               np.arange(pb.x.vector.getLocalSize(), dtype=np.int32))))
