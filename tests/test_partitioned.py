@@ -21,7 +21,7 @@ from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions, sparsi
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor
 from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.block_factors import BlockFactor
-from ureterfsi.fsi.block_jacobian import BlockJacobian
+from ureterfsi.fsi.block_jacobian import BlockJacobian, field_components, field_space
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 
@@ -491,3 +491,27 @@ def test_a_cheaper_wall_jacobian_keeps_the_solution(reference):
     assert max(sweeps) <= 8, sweeps
     with pytest.raises(ValueError, match="wall_jacobian_quadrature_degree"):
         tube_problem(options=SolverOptions(coupling_scheme="partitioned", wall_jacobian_quadrature_degree=0, **TOL))
+
+
+@pytest.mark.parametrize("names", [["displacement"], ["velocity", "pressure"]])
+def test_a_field_space_maps_its_dofs_to_the_mixed_spaces(names):
+    """field_space's map sends each dof of the fields' own space (one field or several, mixed) to the dof of W that
+    holds the same function's value: a function interpolated in both agrees through the map."""
+    square = dmesh.create_unit_square(MPI.COMM_WORLD, 3, 2)
+    cell = square.ufl_cell()
+    vector = ufl.VectorElement("Lagrange", cell, 2)
+    all_names = ["velocity", "displacement", "pressure"]
+    W = fem.FunctionSpace(square, ufl.MixedElement([vector, vector, ufl.FiniteElement("Lagrange", cell, 1)]))
+    V, to_W = field_space(W, all_names, names)
+    values = {"velocity": lambda x: np.vstack([x[0] + 2 * x[1], 3 - x[0] * x[1]]),
+              "displacement": lambda x: np.vstack([x[1] ** 2, x[0] - x[1]]),
+              "pressure": lambda x: 1 + x[0] - 4 * x[1]}
+    on_W, on_V = fem.Function(W), fem.Function(V)
+    for i, name in enumerate(all_names):
+        on_W.sub(i).interpolate(values[name])
+    for j, name in enumerate(names):
+        on_V.sub(j).interpolate(values[name])
+    assert np.abs(on_W.x.array[to_W] - on_V.x.array).max() <= 1e-14
+    assert sorted(set(to_W)) == sorted(to_W) and to_W.size == V.dofmap.index_map.size_local
+    components = field_components(V, names, ufl.TestFunction)
+    assert [len(components[n]) for n in names] == [1 if n == "pressure" else 2 for n in names]
