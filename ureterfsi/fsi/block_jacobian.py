@@ -20,7 +20,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
-from .sparsity import num_cells
+from .sparsity import cell_dofs
 
 CHECK_RTOL = 1e-10     # ||J_block - J[rows, cols]||_F within this part of ||J[rows, cols]||_F at the first refresh
 
@@ -31,11 +31,8 @@ def field_space(W: fem.FunctionSpace, field_names: list, names: list) -> tuple[f
     elements = W.ufl_element().sub_elements()
     V = fem.FunctionSpace(W.mesh, ufl.MixedElement([elements[field_names.index(n)] for n in names]))
     to_W = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1, dtype=np.int64)
-    cells = num_cells(W.mesh)
-    for j, name in enumerate(names):
-        mine = V.sub(j).dofmap.list.array.reshape(cells, -1)
-        theirs = W.sub(field_names.index(name)).dofmap.list.array.reshape(cells, -1)
-        to_W[mine] = theirs
+    for name in names:
+        to_W[cell_dofs(V, names, name)] = cell_dofs(W, field_names, name)
     if (to_W < 0).any():
         raise RuntimeError(f"field_space {names}: {int((to_W < 0).sum())} dofs on no cell")
     return V, to_W

@@ -54,8 +54,7 @@ def kinematic_pairs(problem, solid_split: np.ndarray) -> tuple[np.ndarray, np.nd
     v, u = (cell_dofs(problem.W, problem.field_names, f)[cells].ravel() for f in ("velocity", "displacement"))
     v, first = np.unique(v, return_index=True)
     u = u[first]
-    constrained = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in problem.bcs])
-    cv, cu = np.isin(v, constrained), np.isin(u, constrained)
+    cv, cu = np.isin(v, problem.constraints.constrained), np.isin(u, problem.constraints.constrained)
     owned = np.isin(v, solid_split) & np.isin(u, solid_split)
     keep = owned & ~cv & ~cu
     mismatched = int(np.count_nonzero(owned & (cv != cu)))

@@ -36,7 +36,7 @@ class Constraints:
       conditions constrain the mesh-motion problem instead (`mesh`), and every displacement dof of W mirrors it;
     - `pins` (zero): the pressure dofs of solid cells only, the solid-pressure dofs of `other_cells` (the cells
       outside the Mooney-Rivlin solids; None: no solid pressure);
-    - `bcs`: both; `mesh_rows` and `mesh_rows_local`: the mesh-motion rows removed (global and owned local indices),
+    - `bcs`: both, and `constrained`: their local dofs (ghosts included); `mesh_rows` and `mesh_rows_local`: the mesh-motion rows removed (global and owned local indices),
       at the interface displacement dofs and the Dirichlet rows.
 
     `fluid_cells`, `solid_cells`: local cells of the regions (None: the scene has no such region)."""
@@ -67,6 +67,7 @@ class Constraints:
             Q = layout.sub("solid_pressure")
             self.pins.append(fem.dirichletbc(zero, fem.locate_dofs_topological(Q, tdim, other_cells), Q))
         self.bcs = self.dirichlet + self.pins
+        self.constrained = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in self.bcs])
 
         U = layout.sub("displacement")
         if coupled:

@@ -192,43 +192,46 @@ class PartitionedCoupling:
                 self.schedule.reset()                   # another b0/dt: another operator, another floor
             self.schedule.wall_refreshed()
         forms, factor = self.forms.get(name), self.factors[name]
-        if forms is not None and forms.direct.operator is not None:
-            operator = forms.direct.assemble()
+        direct = forms is not None and forms.direct.operator is not None
+        matrix = forms.direct.assemble() if direct else self._matrix_on_W(name)
+        if forms is not None:
             pb.timings[f"assemble_{name}_jacobian"] += time.perf_counter() - t0
-            t1 = time.perf_counter()
-            factor.factorise(operator, rate)
+        t1 = time.perf_counter()
+        if direct:
+            factor.factorise(matrix, rate)
         else:
-            if forms is not None:
-                matrix = forms.matrix
-                matrix.zeroEntries()
-                fem_petsc.assemble_matrix(matrix, forms.jacobian, bcs=pb.bcs)
-                matrix.assemble()
-                pb.timings[f"assemble_{name}_jacobian"] += time.perf_counter() - t0
-            elif name == "mesh":
-                matrix = pb.mesh_motion_matrix()
-            else:
-                pb._assemble_jacobian()
-                matrix = pb.A
-            t1 = time.perf_counter()
             factor.refresh(matrix, self.index[name], rate)
             if forms is not None:
                 self.bind_direct(name)
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
 
+    def _matrix_on_W(self, name: str) -> PETSc.Mat:
+        """The Jacobian on W whose block `name` is factorised: the block's own form (the urine's, the condensed
+        wall's), the fixed mesh-motion operator, or the whole Jacobian."""
+        pb, forms = self.pb, self.forms.get(name)
+        if forms is not None:
+            forms.matrix.zeroEntries()
+            fem_petsc.assemble_matrix(forms.matrix, forms.jacobian, bcs=pb.bcs)
+            forms.matrix.assemble()
+            return forms.matrix
+        if name == "mesh":
+            return pb.mesh_motion_matrix()
+        pb._assemble_jacobian()
+        return pb.A
+
     def bind_direct(self, name: str) -> None:
         """After the first refresh of block `name` from its Jacobian on W: its later ones assemble the block's own
         Jacobian (fsi.block_jacobian) straight into the operator just extracted, checked here against it; the
         matrix on W is freed."""
         pb, forms, factor = self.pb, self.forms[name], self.factors[name]
-        constrained = np.concatenate([np.zeros(0, np.int32)] + [bc.dof_indices()[0] for bc in pb.bcs])
         split = self.splits[name]
         if name == "solid":
             operator, rows, cols = factor.operator, factor.q_pos, factor.r_pos
         else:
             operator, rows = factor.block, np.arange(len(split))
             cols = rows
-        forms.direct.bind(pb, operator, split, rows, cols, constrained)
+        forms.direct.bind(pb, operator, split, rows, cols, pb.constraints.constrained)
         forms.direct.check(name)
         if forms.matrix is not None:
             forms.matrix.destroy()
