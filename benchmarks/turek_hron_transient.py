@@ -13,6 +13,12 @@ the same periodic regime without the ramp and the slow growth from round-off. St
 from t >= end - window (default: the last 40 % of the run) and its last --periods periods of u_y(A) and
 lift (twice as many of u_x(A) and drag, which oscillate at twice the frequency).
 The JSON holds the series (SI) and the run's cost; it is rewritten every 100 steps while the run goes on.
+With --checkpoint a killed run resumes where its last checkpoint left it, and a finished one can be taken
+further (a later --end); the wall time counts the steps kept, over all the runs that made them.
+
+    mpiexec -n 2 .venv/bin/python benchmarks/turek_hron_transient.py --case FSI2 --refinement 2 --dt 2e-3 \
+        --end 5.2 --start steady --kick 30 0.05 --mesh-motion elastic --mesh-jacobian-stiffening 1 \
+        --json fsi2_r2.json --checkpoint fsi2_r2_state.npz
 """
 from __future__ import annotations
 
@@ -85,6 +91,9 @@ def main(argv=None):
     ap.add_argument("--window", type=float, help="statistics over the last WINDOW seconds")
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--json", help="write series and cost here")
+    ap.add_argument("--checkpoint", help="checkpoint path: saved every --checkpoint-every steps and at the end; "
+                    "a run of the same case, mesh, dt, start and options resumes from it (to its own --end)")
+    ap.add_argument("--checkpoint-every", type=int, default=100, help="steps between checkpoints")
     ap.add_argument("--from-json", help="no run: tabulate the series of an earlier --json file")
     args = ap.parse_args(argv)
     comm = MPI.COMM_WORLD
@@ -95,17 +104,19 @@ def main(argv=None):
         if case is None:
             ap.error(f"{args.from_json} holds a series written while its run went on (no case recorded): give --case")
     else:
-        logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s", force=True)
+        logging.basicConfig(level=logging.INFO if comm.rank == 0 else logging.WARNING,
+                            format="%(asctime)s %(message)s", force=True)
         options = th.transient_options(mesh_motion=args.mesh_motion, mesh_stiffening=args.mesh_stiffening,
                                        mesh_jacobian_stiffening=args.mesh_jacobian_stiffening)
         res = th.run_transient(args.case or "FSI3", args.refinement, args.dt, args.end, args.start, tuple(args.kick), comm,
-                               options=options, series_path=args.json)
+                               options=options, series_path=args.json, checkpoint_path=args.checkpoint,
+                               checkpoint_every=args.checkpoint_every)
         case, series = res.case, {k: v.tolist() for k, v in res.series.items()}
         run = {"mesh_motion": args.mesh_motion, "mesh_stiffening": args.mesh_stiffening,
                "mesh_jacobian_stiffening": args.mesh_jacobian_stiffening}
         run.update({k: getattr(res, k) for k in ("case", "refinement", "dt", "end", "start", "dofs", "cells",
                                                  "setup_time", "wall_time", "steps", "newton_iterations",
-                                                 "reduced_steps", "min_ale_jacobian")})
+                                                 "reduced_steps", "min_ale_jacobian", "resumed_from_step")})
         if args.json and comm.rank == 0:
             Path(args.json).write_text(json.dumps({"run": run, "series": series}) + "\n")
     if comm.rank != 0:

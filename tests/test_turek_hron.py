@@ -138,3 +138,25 @@ def test_fsi3_oscillation_starts_and_energy_stays_bounded(fsi3_kicked):
     kinetic, elastic = s["solid_kinetic_energy"][after], s["elastic_energy"][after]
     assert kinetic.max() >= 0.01 * np.ptp(elastic), f"kinetic energy {kinetic.max():.2e} J/m"
     assert energy.max() <= 0.15 and np.all(np.isfinite(energy))
+
+
+def test_a_transient_run_resumes_from_its_checkpoint(fsi3_kicked, tmp_path):
+    """A run stopped after 4 steps (its end) with a checkpoint and taken on to 8 steps has the series of one
+    uninterrupted run (to Newton's tolerance: a resumed run refactorises its Jacobian where the other reuses
+    it), and only the 4 new steps' wall time is added; a checkpoint past a run's end is set aside."""
+    kw = dict(refinement=0.5, dt=2e-3, start="steady", kick=(10.0, 0.05), checkpoint_path=tmp_path / "state.npz",
+              checkpoint_every=3)
+    first = th.run_transient("FSI3", end=4 * 2e-3, **kw)
+    assert (first.steps, first.resumed_from_step) == (4, 0)
+    rest = th.run_transient("FSI3", end=8 * 2e-3, **kw)
+    assert (rest.steps, rest.resumed_from_step) == (8, 4)
+    assert first.wall_time < rest.wall_time < 2.5 * first.wall_time + 10.0
+    whole = {k: v[:9] for k, v in fsi3_kicked.series.items()}     # the initial state and 8 steps
+    for k, v in rest.series.items():
+        assert v.shape == whole[k].shape, k
+        scale = max(np.abs(whole[k]).max(), 1e-30)
+        assert np.abs(v - whole[k]).max() <= 1e-6 * scale, (k, np.abs(v - whole[k]).max() / scale)
+    assert np.abs(rest.series["uy_A"] - rest.series["uy_A"][0]).max() > 1e-4 * 2e-3, "the kick moved the flag"
+    again = th.run_transient("FSI3", end=2 * 2e-3, **kw)            # the checkpoint holds t = 8 dt > this end
+    assert (again.steps, again.resumed_from_step) == (2, 0)
+    assert list(tmp_path.glob("state.rank0of1.stale-*.npz")), "the checkpoint past the end was set aside"

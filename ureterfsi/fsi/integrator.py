@@ -3,10 +3,10 @@
 A step whose Newton iteration fails (or gives a non-finite residual) is retried with dt/2, at most
 `max_halvings` times; after a success the step grows back by 2x per step up to the nominal dt.
 Steps are shortened to land exactly on every output time. An inverted ALE mesh stops the run.
-Checkpoints (every `checkpoint_interval` steps, atomically written) hold the state, its history,
-the observers' records and the run's identity (TimeSettings.identity); a re-run with the same
+Checkpoints (every `checkpoint_interval` steps and at the end, atomically written) hold the state, its
+history, the observers' records and the run's identity (TimeSettings.identity); a re-run with the same
 checkpoint path resumes from the last one only if it is readable, complete, of this problem's size
-and partition and of the same identity. Otherwise it is set aside (renamed *.stale-<UTC time>.npz),
+and partition and of the same identity, and not past the run's end. Otherwise it is set aside (renamed *.stale-<UTC time>.npz),
 one line says why, and the run starts from t = 0.
 """
 from __future__ import annotations
@@ -136,6 +136,7 @@ class TimeIntegrator:
     observers: list = field(default_factory=list)
     records: list = field(default_factory=list)
     failed_attempts: list = field(default_factory=list)
+    resumed_from: int = 0      # the step of the checkpoint run() went on from (0: from the initial state)
     _pending: Optional[tuple] = field(default=None, init=False, repr=False)   # checked, not yet restored
 
     def _checkpoint_file(self):
@@ -186,6 +187,8 @@ class TimeIntegrator:
         missing = [k for k in _CHECKPOINT_META if k not in meta]
         if missing:
             return None, f"incomplete (no {missing[0]!r} in its metadata)"
+        if meta["time"] > self.settings.end + 1e-9 * self.settings.dt:
+            return None, f"past this run's end (its t = {meta['time']:.6g} s, the end {self.settings.end:.6g} s)"
         wanted = {str(k): str(v) for k, v in self.settings.identity.items()}
         if meta["identity_hash"] != identity_hash(wanted) or meta["identity"] != wanted:
             return None, f"written by another run ({identity_differences(meta['identity'], wanted)})"
@@ -253,6 +256,7 @@ class TimeIntegrator:
         self.records = [StepRecord(**r) for r in meta["records"]]
         self.failed_attempts = [FailedAttempt(**a) for a in meta.get("failed_attempts", [])]
         log.info("resumed from checkpoint: step %d t=%.6g s", meta["step"], pb.time)
+        self.resumed_from = meta["step"]
         return meta["step"], meta["dt_next"]
 
     def remove_checkpoint(self):
@@ -316,4 +320,6 @@ class TimeIntegrator:
             dt = dt_try if attempt else min(s.dt, 2.0 * dt)   # after a halving, grow back 2x per step
             if s.checkpoint_interval and step % s.checkpoint_interval == 0:
                 self.save_checkpoint(step, dt)
+        if s.checkpoint_interval and step % s.checkpoint_interval and step > (resumed or (0,))[0]:
+            self.save_checkpoint(step, dt)    # the end state too: a longer run of the same identity goes on from it
         return self.records

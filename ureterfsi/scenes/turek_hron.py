@@ -487,6 +487,7 @@ class TransientSeries(Observer):
                  save_every: int = 0):
         self.forces = ObstacleForces(problem, tags)
         self.point, self.path, self.save_every = point, path, save_every
+        self.elapsed, self._clock = 0.0, time.perf_counter()    # wall time of the steps since step 0
         scene, ops = problem.scene, problem.ops
         solid = scene.solids[0].material
         X = problem.split()
@@ -502,6 +503,8 @@ class TransientSeries(Observer):
         self.data = {k: [] for k in self.names}
 
     def observe(self, problem, step):
+        now = time.perf_counter()
+        self.elapsed, self._clock = self.elapsed + (now - self._clock if step else 0.0), now
         uA = point_value(problem.field("displacement"), self.point)
         drag, lift = self.forces.variational()
         energies = [problem.comm.allreduce(fem.assemble_scalar(f), MPI.SUM) for f in self._energy]
@@ -517,6 +520,18 @@ class TransientSeries(Observer):
 
     def arrays(self) -> dict:
         return {k: np.asarray(v) for k, v in self.data.items()}
+
+    def state(self) -> dict:
+        """The series and the wall time of the steps it holds (`elapsed`, s; a resumed run adds its own)."""
+        return {"data": self.data, "elapsed": self.elapsed}
+
+    def load_state(self, state: dict) -> None:
+        self.data = {k: list(state["data"][k]) for k in self.names}
+        self.elapsed, self._clock = float(state["elapsed"]), time.perf_counter()
+
+    def cannot_resume(self, state: dict) -> str:
+        missing = [k for k in self.names if k not in state.get("data", {})]
+        return f"its series lacks {missing[0]!r}" if missing else ""
 
 
 @dataclass
@@ -535,6 +550,7 @@ class TransientResult:
     reduced_steps: int             # steps shorter than the nominal dt (retries after a Newton failure)
     min_ale_jacobian: float
     series: dict
+    resumed_from_step: int = 0     # the checkpoint's step this run went on from (0: from the start)
 
 
 CASES = {"FSI2": FSI2(), "FSI3": FSI3()}
@@ -548,10 +564,18 @@ def transient_options(**overrides) -> SolverOptions:
     return SolverOptions(**({"mumps_workspace_percent": MUMPS_WORKSPACE_PERCENT} | overrides))
 
 
+def transient_identity(case: str, refinement: float, dt: float, start: str, kick: tuple,
+                       options: SolverOptions, ranks: int) -> dict:
+    """What determines a run_transient trajectory (its end excepted, so a resumed run may go further)."""
+    return {"scene": f"Turek-Hron {case}", "refinement": repr(float(refinement)), "dt": repr(float(dt)),
+            "start": start, "kick": repr(tuple(float(k) for k in kick)) if start == "steady" else "-",
+            "options": repr(options), "ranks": str(ranks)}
+
+
 def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3, end: float = 10.0,
                   start: str = "rest", kick: tuple = (10.0, 0.05), comm=MPI.COMM_WORLD,
                   options: SolverOptions | None = None, max_halvings: int = 4, series_path=None,
-                  save_every: int = 100) -> TransientResult:
+                  save_every: int = 100, checkpoint_path=None, checkpoint_every: int = 0) -> TransientResult:
     """Transient FSI2/FSI3 with BDF2 at fixed nominal dt.
 
     start "rest": the benchmark's protocol, fluid at rest and the inflow ramped over RAMP_TIME;
@@ -559,26 +583,33 @@ def run_transient(case: str = "FSI3", refinement: float = 0.5, dt: float = 1e-3,
     pushed by kick_force(rho_s, *kick) (acceleration [m/s^2], duration [s]) so the oscillation starts at once.
     The periodic regime is the same; "steady" skips the ramp and the slow growth from round-off.
     series_path: the time series is written there (JSON) every `save_every` steps while it runs.
+    checkpoint_path: state and series saved every `checkpoint_every` steps and at the end; a run of the same
+    transient_identity resumes from it (to this `end`, which may lie beyond the checkpoint's run's).
     options: the engine's options, transient_options() by default."""
     if start not in ("rest", "steady"):
         raise ValueError(f"run_transient start: 'rest' or 'steady', got {start!r}")
+    if checkpoint_path and checkpoint_every < 1:
+        raise ValueError(f"run_transient checkpoint_every: >= 1 steps with a checkpoint_path, got {checkpoint_every}")
     params = CASES[case]
+    options = options or transient_options()
     t0 = time.perf_counter()
     mesh, ct, ft = build_mesh(refinement, comm)
     forces = [BodyForce([TAGS.flag], kick_force(params.rho_s, *kick))] if start == "steady" else []
     scene, inflow = make_scene(mesh, ct, ft, params, ramp_time=RAMP_TIME if start == "rest" else 0.0,
                                body_forces=forces)
-    problem = MonolithicFSI(scene, options or transient_options())
-    if start == "steady":
-        solve_steady_with_continuation(problem, inflow, amplitudes=(0.25, 0.5, 0.75, 1.0))
+    problem = MonolithicFSI(scene, options)
     series = TransientSeries(problem, path=series_path, save_every=save_every)
-    integrator = TimeIntegrator(problem, TimeSettings(end=end, dt=dt, max_halvings=max_halvings),
-                                observers=[series])
+    settings = TimeSettings(end=end, dt=dt, max_halvings=max_halvings,
+                            checkpoint_interval=checkpoint_every if checkpoint_path else 0,
+                            checkpoint_path=checkpoint_path,
+                            identity=transient_identity(case, refinement, dt, start, kick, options, comm.size))
+    integrator = TimeIntegrator(problem, settings, observers=[series])
+    if start == "steady" and not integrator.has_checkpoint():
+        solve_steady_with_continuation(problem, inflow, amplitudes=(0.25, 0.5, 0.75, 1.0))
     t1 = time.perf_counter()
     records = integrator.run()
-    t2 = time.perf_counter()
     ncells = comm.allreduce(mesh.topology.index_map(2).size_local, MPI.SUM)
     reduced = sum(1 for r in records[:-1] if r.dt < dt * (1.0 - 1e-9))
-    return TransientResult(case, refinement, dt, end, start, problem.unknowns, ncells, t1 - t0, t2 - t1,
+    return TransientResult(case, refinement, dt, end, start, problem.unknowns, ncells, t1 - t0, series.elapsed,
                            len(records), sum(r.newton_iterations for r in records), reduced,
-                           min(r.min_ale_jacobian for r in records), series.arrays())
+                           min(r.min_ale_jacobian for r in records), series.arrays(), integrator.resumed_from)
