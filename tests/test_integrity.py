@@ -427,3 +427,26 @@ def test_run_of_another_rung_in_a_runs_place_is_named(tmp_path, cfg):
                       "the run of model 2, mesh_level coarse, fidelity fully_coupled, symmetry quarter")
     expect[str(p)]["fidelity"] = "one_way"
     assert aggregate.combine_models([p], cfg, expect=expect).sizes["model"] == 1
+
+
+def test_atomically_written_files_get_the_umasks_permissions(tmp_path):
+    """Results written through a temporary file are readable as a plain open() would leave them (mkstemp's
+    0600 would hide them from a group sharing a cluster's project directory); a failed block leaves nothing."""
+    import os
+    import stat
+
+    from ureterfsi.provenance import atomic_path, write_json
+    old = os.umask(0o022)
+    try:
+        write_json(tmp_path / "a.json", {"x": 1.0})
+        os.umask(0o077)
+        with atomic_path(tmp_path / "b.txt") as tmp:
+            tmp.write_text("b\n")
+        with pytest.raises(RuntimeError), atomic_path(tmp_path / "c.txt") as tmp:
+            tmp.write_text("partial\n")
+            raise RuntimeError("killed")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "a.json").stat().st_mode) == 0o644
+    assert stat.S_IMODE((tmp_path / "b.txt").stat().st_mode) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.txt"]
