@@ -320,6 +320,6 @@ class TimeIntegrator:
             dt = dt_try if attempt else min(s.dt, 2.0 * dt)   # after a halving, grow back 2x per step
             if s.checkpoint_interval and step % s.checkpoint_interval == 0:
                 self.save_checkpoint(step, dt)
-        if s.checkpoint_interval and step % s.checkpoint_interval and step > (resumed or (0,))[0]:
+        if s.checkpoint_interval and step % s.checkpoint_interval and step > self.resumed_from:
             self.save_checkpoint(step, dt)    # the end state too: a longer run of the same identity goes on from it
         return self.records
