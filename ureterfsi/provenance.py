@@ -11,7 +11,7 @@ import importlib
 import json
 import os
 import subprocess
-import tempfile
+import secrets
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -72,17 +72,19 @@ def provenance_attrs(cfg: dict, **extra) -> dict:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike):
-    """Yield a temporary path next to `path`; rename it onto `path` only if the block succeeds. The file gets
-    the permissions of a plain open() under the process's umask (mkstemp's own are 0600)."""
+    """Yield a temporary path next to `path`; rename it onto `path` only if the block succeeds. The file is
+    created with mode 0666 for the kernel to apply the umask, as a plain open() does (mkstemp's is 0600)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix + ".part", dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
+    while True:
+        tmp = path.parent / f".{path.stem}.{secrets.token_hex(4)}{path.suffix}.part"
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            break
+        except FileExistsError:
+            continue
     try:
-        yield Path(tmp)
+        yield tmp
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
