@@ -31,20 +31,18 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
+from ureterfsi.provenance import atomic_path  # noqa: E402
 from ureterfsi.scenes import turek_hron_transient as th  # noqa: E402
 
 SCALE = {"ux_A": (1e3, "mm"), "uy_A": (1e3, "mm"), "drag": (1.0, "N/m"), "lift": (1.0, "N/m")}
 
 
-def table(case: str, series: dict, t_from: float, periods: int) -> str:
-    """Rows quantity | ours mean +- amplitude [f] | then per published row: its values and our relative errors
-    (mean, amplitude, frequency; th.reference_errors)."""
-    t = np.asarray(series["time"])
-    stats = th.tail_statistics(series, t_from, periods)
-    lines = [f"{case}: statistics over t in [{t_from:.3f}, {t[-1]:.3f}] s, last {periods} period(s) of u_y "
+def table(case: str, stats: dict, t_from: float, t_end: float, periods: int) -> str:
+    """Rows quantity | ours mean +- amplitude [f] (`stats`: th.tail_statistics) | then per published row: its
+    values and our relative errors (mean, amplitude, frequency; th.reference_errors)."""
+    lines = [f"{case}: statistics over t in [{t_from:.3f}, {t_end:.3f}] s, last {periods} period(s) of u_y "
              f"and lift ({2 * periods} of u_x and drag)"]
     for source, rows in th.REFERENCES.items():
         lines.append(f"{'quantity':>11} {'ours':>34} {source:>34} {'err mean':>9} {'err ampl':>9} {'err f':>7}")
@@ -54,7 +52,7 @@ def table(case: str, series: dict, t_from: float, periods: int) -> str:
                 lines.append(f"{label:>11} {stats[k]}")
                 continue
             (m, a, f), (rm, ra, rf) = stats[k], rows[case][k]
-            em, ea, ef = th.reference_errors(stats[k], rows[case][k])
+            em, ea, ef = th.reference_errors((m, a, f), (rm, ra, rf))
             lines.append(f"{label:>11} {m * scale:10.4g} +- {a * scale:9.4g} [{f:6.3f} Hz] "
                          f"{rm * scale:10.4g} +- {ra * scale:9.4g} [{rf:5.2f} Hz] "
                          f"{100 * em:8.2f}% {100 * ea:8.2f}% {100 * ef:6.2f}%")
@@ -114,19 +112,19 @@ def main(argv=None):
                                                  "setup_time", "wall_time", "steps", "newton_iterations",
                                                  "reduced_steps", "min_ale_jacobian", "resumed_from_step")})
         if args.json and comm.rank == 0:
-            Path(args.json).write_text(json.dumps({"run": run, "series": series}) + "\n")
+            with atomic_path(args.json) as tmp:
+                tmp.write_text(json.dumps({"run": run, "series": series}) + "\n")
     if comm.rank != 0:
         return
     t_end = series["time"][-1]
     t_from = t_end - (args.window if args.window else 0.4 * t_end)
-    print(table(case, series, t_from, args.periods))
+    stats = th.tail_statistics(series, t_from, args.periods)
+    print(table(case, stats, t_from, t_end, args.periods))
     if run:
-        t = np.asarray(series["time"])
-        try:
-            _, _, f = th.periodic_stats(t[t >= t_from], np.asarray(series["uy_A"])[t >= t_from], args.periods)
-            print(cost(run, f))
-        except ValueError as err:
-            print(f"cost: {run['steps']} steps in {run['wall_time']:.0f} s; no period ({err})")
+        if isinstance(stats["uy_A"], str):
+            print(f"cost: {run['steps']} steps in {run['wall_time']:.0f} s; no period ({stats['uy_A']})")
+        else:
+            print(cost(run, stats["uy_A"][2]))
 
 
 if __name__ == "__main__":

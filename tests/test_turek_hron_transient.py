@@ -32,7 +32,6 @@ def test_periodic_stats_on_a_known_signal():
         th.periodic_stats(t, t ** 2)
 
 
-
 def test_reference_errors_measure_a_mean_near_zero_against_the_amplitude():
     """A mean far from zero is compared with itself; one near zero (lift, u_y) with a tenth of the amplitude,
     the scale of the published rows' own spread; amplitudes and frequencies relative to themselves."""
@@ -73,9 +72,8 @@ def test_the_stored_periodic_runs_meet_the_featflow_row(run):
 
 def test_fsi2_changes_by_less_than_1_6_percent_from_refinement_1_to_2():
     """Spatial convergence of the stored FSI2 runs over the same window (t in [3.0, 5.2] s, two swings):
-    every mean, amplitude and frequency of refinement 2 within 1.6 % of refinement 1's (largest: the drag's
-    amplitude, 1.53 %) (a mean near zero on the
-    scale of reference_errors)."""
+    every mean, amplitude and frequency of refinement 2 within 1.6 % of refinement 1's (a mean near zero on the
+    scale of reference_errors; largest: the drag's amplitude, 1.53 %)."""
     stats = {}
     for name in ("turek_hron_fsi2_r1_dt2e-3_chi1.json", "turek_hron_fsi2_r2_dt2e-3_chi1.json"):
         _, series = _stored(name)
