@@ -183,6 +183,54 @@ def test_mumps_workspace_reaches_every_factorisation(lu_run):
     assert fluid.mesh_motion.ksp.getPC().getFactorMatrix().getMumpsIcntl(14) == 73
 
 
+OUT_OF_CORE_SCRIPT = """
+import os, sys
+from mpi4py import MPI
+from petsc4py import PETSc
+from ureterfsi.fsi.condensation import direct
+from ureterfsi.fsi.linear_solvers import Mumps, out_of_core_directory
+n = 4000
+A = PETSc.Mat().createAIJ((n, n), nnz=3, comm=MPI.COMM_SELF)
+for i in range(n):
+    A.setValues(i, [j for j in (i - 1, i, i + 1) if 0 <= j < n], [-1.0, 2.5, -1.0][(i == 0):3 - (i == n - 1)])
+A.assemble()
+ksp = direct(MPI.COMM_SELF, "ooc_", "lu", Mumps(out_of_core=True))
+ksp.setOperators(A)
+b, x = A.createVecs()
+b.set(1.0)
+ksp.solve(b, x)
+r = b.duplicate()
+A.mult(x, r)
+r.axpy(-1.0, b)
+print(out_of_core_directory(), len(os.listdir(out_of_core_directory())), r.norm() / b.norm(),
+      ksp.getPC().getFactorMatrix().getMumpsIcntl(22))
+"""
+
+
+@pytest.mark.parametrize("ending", ["exit", "kill"])
+def test_out_of_core_factors_go_to_a_scratch_directory_removed_with_the_process(tmp_path, ending):
+    """Mumps(out_of_core=True): the factor is written to a directory of the process's own under $MUMPS_OOC_TMPDIR
+    (node-local scratch on a cluster) and solves from it; the directory goes once the process has ended, by an
+    exit or by SIGKILL (MUMPS deletes a factor's files only when the factor is destroyed)."""
+    import os
+    import subprocess
+    import sys
+    import time
+    script = OUT_OF_CORE_SCRIPT + ("import signal; os.kill(os.getpid(), signal.SIGKILL)" if ending == "kill" else "")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300,
+                         env=os.environ | {"MUMPS_OOC_TMPDIR": str(tmp_path)})
+    assert run.returncode == (-9 if ending == "kill" else 0), run.stderr[-2000:]
+    directory, files, residual, icntl22 = run.stdout.split()
+    assert os.path.dirname(directory) == str(tmp_path) and int(files) >= 1
+    assert float(residual) < 1e-12 and int(icntl22) == 1
+    for _ in range(100):
+        if not os.listdir(tmp_path):
+            break
+        time.sleep(0.1)
+    assert not os.listdir(tmp_path), os.listdir(tmp_path)
+    assert "error" not in run.stderr.lower(), run.stderr[-2000:]
+
+
 def test_turek_hron_fsi1_quantities_equal_the_lu_path():
     th = pytest.importorskip("ureterfsi.scenes.turek_hron")
     lu = th.run_fsi1(0.5, options=SolverOptions(linear_solver="mumps"))

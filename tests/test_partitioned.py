@@ -21,6 +21,7 @@ from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions, sparsi
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor
 from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.block_factors import BlockFactor
+from ureterfsi.fsi.linear_solvers import Mumps
 from ureterfsi.fsi.block_jacobian import BlockJacobian, field_components, field_space
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
@@ -118,7 +119,7 @@ def test_the_mesh_block_is_factorised_per_component_where_it_does_not_couple_the
     part.refresh("mesh")
     factor = part.factors["mesh"]
     assert factor.decoupled is decoupled
-    whole = BlockFactor(pb.comm, "test_mesh_whole_", 100)
+    whole = BlockFactor(pb.comm, "test_mesh_whole_", Mumps(100))
     whole.refresh(pb.mesh_motion_matrix(), part.index["mesh"], 0.0)
     b = part.rows["mesh"].duplicate()
     b.setRandom()
@@ -217,7 +218,7 @@ def test_the_condensed_solid_solve_is_the_whole_blocks():
     assert isinstance(condensed, CondensedSolidFactor)
     part.refresh("solid")                     # the condensed operator from its own form at this state
     index = part.index["solid"]
-    whole = BlockFactor(pb.comm, "test_whole_solid_", 50)
+    whole = BlockFactor(pb.comm, "test_whole_solid_", Mumps(50))
     whole.refresh(A, index, condensed.rate)
     rhs = b.getSubVector(index).duplicate()
     values = np.random.default_rng(4).standard_normal(rhs.getLocalSize())
@@ -515,3 +516,28 @@ def test_a_field_space_maps_its_dofs_to_the_mixed_spaces(names):
     assert sorted(set(to_W)) == sorted(to_W) and to_W.size == V.dofmap.index_map.size_local
     components = field_components(V, names, ufl.TestFunction)
     assert [len(components[n]) for n in names] == [1 if n == "pressure" else 2 for n in names]
+
+
+def test_out_of_core_factors_give_the_in_core_solution():
+    """SolverOptions.mumps_out_of_core: every MUMPS factor of the partitioned scheme (the wall's and its mass's, the
+    mesh's, the urine's) is made out of core (ICNTL(22) = 1, read back from the factors), its files in this
+    process's scratch directory while it lives; the same factors, so the same sweeps and the same solution to
+    round-off (the memory it saves: benchmarks/coupled_linear_solver.py)."""
+    import os
+
+    from ureterfsi.fsi.linear_solvers import out_of_core_directory
+    options = dict(coupling_scheme="partitioned", newton_field_rtol=1e-8, **TOL)
+    runs = {core: tube_run(mumps_out_of_core=core, **options) for core in (False, True)}
+    factors = {}
+    for core, (pb, _) in runs.items():
+        blocks = pb.partitioned.factors
+        ksps = {"solid": blocks["solid"].ksp, "mass": blocks["solid"].mass_ksp, "flow": blocks["flow"].ksp}
+        ksps |= {f"mesh {c}": part.ksp for c, part in enumerate(blocks["mesh"].parts)}
+        factors[core] = {n: k.getPC().getFactorMatrix() for n, k in ksps.items()}
+    assert {n: f.getMumpsIcntl(22) for n, f in factors[True].items()} == dict.fromkeys(factors[True], 1)
+    assert {n: f.getMumpsIcntl(22) for n, f in factors[False].items()} == dict.fromkeys(factors[False], 0)
+    assert len(os.listdir(out_of_core_directory())) >= len(factors[True])
+    (inc, sweeps_inc), (ooc, sweeps_ooc) = runs[False], runs[True]
+    assert sweeps_ooc == sweeps_inc
+    assert max(field_errors(ooc, inc).values()) <= 1e-12, field_errors(ooc, inc)
+    assert "MUMPS out of core" in ooc.options.coupled_solution()

@@ -236,3 +236,29 @@ def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_pa
     under = np.abs(z[np.argmax(np.abs(line[-1]))] - geom.stricture.position) < 0.5 * geom.stricture.length
     outside = np.abs(z - geom.stricture.position) >= 0.5 * geom.stricture.length
     assert under and np.abs(line[-1][outside]).max() < 0.9 * coupled[-1]   # the old probe's maximum: too low
+
+
+def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir, tmp_path, repo_root):
+    """`python -m ureterfsi.study --out-of-core` (rule solve: a job given less memory than it reserves): MUMPS's
+    factors on disk, the same probes as the in-core run over its first two steps (to round-off), and the dataset
+    says how it was solved."""
+    import xarray as xr
+
+    from ureterfsi.study.cli import main
+    _, ds = mini
+    out = tmp_path / "ooc.nc"
+    configs = [str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml")]
+    assert main(["--config", *configs, "--model", "3", "--level", "coarse", "--symmetry", "quarter",
+                 "--mesh", str(mini_dir / "model3.msh"), "--out", str(out), "--end", "0.04", "--out-of-core"]) == 0
+    with xr.open_dataset(out) as ooc:
+        assert ooc.attrs["solver"] == ds.attrs["solver"] + ", MUMPS out of core"
+        early = ds.sel(time=ooc["time"].values, probe_time=ooc["probe_time"].values)
+        early = early.isel(step=range(ooc.sizes["step"]))
+        for name, var in ooc.data_vars.items():
+            if "wall_time" in name:
+                continue
+            ref = early[name].values
+            if name == "newton_residual":       # a converged residual: round-off of the state
+                np.testing.assert_allclose(var.values, ref, rtol=1e-6)
+            else:
+                np.testing.assert_allclose(var.values, ref, rtol=0, atol=1e-11 * np.nanmax(np.abs(ref)), err_msg=name)

@@ -120,3 +120,20 @@ def test_physical_memory_is_memtotal(tmp_path):
     fake.write_text("MemFree:  1024 kB\n")
     with pytest.raises(ValueError, match="meminfo: no MemTotal"):
         physical_memory_mib(str(fake))
+
+
+def test_a_fully_coupled_solve_given_less_memory_than_it_reserves_runs_out_of_core():
+    """Rule solve passes --out-of-core to a fully coupled run given less memory than it reserves (a local run caps
+    each reservation at its budget: config/reference.yaml's fine level, 26 000 MiB, here), so that MUMPS keeps its
+    factors on disk; given its reservation (a cluster job), or reserving less than the budget, it runs in core."""
+    targets = [f"results/runs/fully_coupled/quarter/model3_{level}.nc" for level in ("coarse", "fine")]
+    reserved = yaml.safe_load((REPO / "config/reference.yaml").read_text())["study"]["memory_mb"]["fully_coupled"]
+    for budget in (reserved["fine"] - 1, reserved["fine"]):
+        run = _snakemake("-n", "-p", "--forceall", "--cores", "2", "--resources", f"mem_mb={budget}",
+                         "--configfile", "config/config.yaml", "config/reference.yaml", "--", *targets)
+        assert run.returncode == 0, run.stderr[-3000:]
+        commands = {level: [ln for ln in run.stdout.splitlines() if "-m ureterfsi.study" in ln and
+                            f"--level {level} " in ln] for level in ("coarse", "fine")}
+        assert all(len(c) == 1 for c in commands.values()), commands
+        assert ("--out-of-core" in commands["fine"][0]) == (budget < reserved["fine"]), commands
+        assert "--out-of-core" not in commands["coarse"][0]

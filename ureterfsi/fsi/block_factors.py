@@ -5,14 +5,14 @@ from __future__ import annotations
 from petsc4py import PETSc
 
 from .condensation import direct
-from .linear_solvers import mumps_status
+from .linear_solvers import Mumps, mumps_status
 
 
 class BlockFactor:
     """LU (MUMPS) of a diagonal block A[I, I] of a matrix, kept until `refresh`."""
 
-    def __init__(self, comm, prefix: str, workspace_percent: int):
-        self.ksp = direct(comm, prefix, "lu", workspace_percent)
+    def __init__(self, comm, prefix: str, mumps: Mumps):
+        self.ksp = direct(comm, prefix, "lu", mumps)
         self.block = None
         self.rate = None                  # b0/dt of the Jacobian it was factorised from
 
@@ -46,8 +46,8 @@ class ComponentFactor:
 
     DECOUPLED_RTOL = 1e-12        # ||A[I, I]||_F^2 - sum_c ||A[I_c, I_c]||_F^2 within this part of ||A[I, I]||_F^2
 
-    def __init__(self, comm, prefix: str, workspace_percent: int, components: list):
-        self.comm, self.prefix, self.percent = comm, prefix, workspace_percent
+    def __init__(self, comm, prefix: str, mumps: Mumps, components: list):
+        self.comm, self.prefix, self.mumps = comm, prefix, mumps
         self.components = components
         self.parts, self.subsets, self.work = [], [], []     # per component: BlockFactor, PETSc IS, (rhs, solution)
         self.whole = None                 # BlockFactor of the whole block, where it couples them
@@ -60,7 +60,7 @@ class ComponentFactor:
         if not self.parts:
             indices = index.getIndices()
             self.subsets = [PETSc.IS().createGeneral(indices[p], comm=self.comm) for p in self.components]
-            self.parts = [BlockFactor(self.comm, f"{self.prefix}{c}_", self.percent)
+            self.parts = [BlockFactor(self.comm, f"{self.prefix}{c}_", self.mumps)
                           for c in range(len(self.components))]
         blocks = [matrix.createSubMatrix(s, s, submat=f.block) for s, f in zip(self.subsets, self.parts)]
         total = block.norm(PETSc.NormType.FROBENIUS) ** 2
@@ -71,7 +71,7 @@ class ComponentFactor:
                 factor.factorise(sub, rate)
             self.work = [(sub.createVecLeft(), sub.createVecRight()) for sub in blocks]
         else:
-            self.whole = self.whole or BlockFactor(self.comm, self.prefix, self.percent)
+            self.whole = self.whole or BlockFactor(self.comm, self.prefix, self.mumps)
             self.whole.factorise(block, rate)
         self.rate = rate
 

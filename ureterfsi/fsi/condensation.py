@@ -30,18 +30,18 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .linear_solvers import mumps_options, mumps_status, set_options
+from .linear_solvers import Mumps, mumps_status, set_options
 from .sparsity import cell_dofs
 
 KINEMATIC_RTOL = 1e-10        # the condensed operator's kinematic rows vanish to this part of (b0/dt) ||M||
 
 
-def direct(comm, prefix: str, kind: str, workspace_percent: int) -> PETSc.KSP:
-    """A KSP applying a MUMPS factorisation (`kind` "lu" or "cholesky") of its operator."""
+def direct(comm, prefix: str, kind: str, mumps: Mumps) -> PETSc.KSP:
+    """A KSP applying a MUMPS factorisation (`kind` "lu" or "cholesky", made as `mumps` says) of its operator."""
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
     set_options(prefix, {"ksp_type": "preonly", "pc_type": kind, "pc_factor_mat_solver_type": "mumps"}
-                | mumps_options(workspace_percent))
+                | mumps.options())
     ksp.setFromOptions()
     return ksp
 
@@ -94,7 +94,7 @@ class CondensedSolidFactor:
     a lower bound of M's smallest eigenvalue (mass_eigenvalue_floor; 0: none); `cell_pos`: positions in the split of
     the cell unknowns (P0), eliminated cell by cell."""
 
-    def __init__(self, comm, prefix: str, workspace_percent: int, solid_split: np.ndarray, offset: int,
+    def __init__(self, comm, prefix: str, mumps: Mumps, solid_split: np.ndarray, offset: int,
                  v_pos: np.ndarray, u_pos: np.ndarray, mass: PETSc.Mat, mass_floor: float = 0.0,
                  cell_pos: np.ndarray | None = None):
         n = len(solid_split)
@@ -115,7 +115,7 @@ class CondensedSolidFactor:
                                               for p in (v_pos, u_pos, self.r_pos, self.q_pos))
         self.operator = None              # J[Q, R], in its own numbering (rows Q, columns R in the split's order)
         self.IQo = self.IRo = self.IPq = self.IPr = None
-        self.ksp, self.mass_ksp = (direct(comm, f"{prefix}{p}", kind, workspace_percent)
+        self.ksp, self.mass_ksp = (direct(comm, f"{prefix}{p}", kind, mumps)
                                    for p, kind in (("", "lu"), ("mass_", "cholesky")))
         self.M = mass.createSubMatrix(self.IU, self.IV)
         self.M.setOption(PETSc.Mat.Option.SYMMETRIC, True)

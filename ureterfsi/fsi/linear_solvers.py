@@ -19,8 +19,14 @@ never the Newton iterate beyond the Krylov tolerance.
 """
 from __future__ import annotations
 
+import functools
 import gc
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from dataclasses import dataclass
 
 from petsc4py import PETSc
 
@@ -71,35 +77,67 @@ def direct_package(linear_solver: str) -> str:
     return linear_solver if linear_solver in DIRECT else "mumps"
 
 
-def mumps_options(workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
-    """PETSc options (under a factor's prefix) of every MUMPS LU of the engine: METIS nested-dissection ordering
-    (ICNTL(7) = 5, which suits 3D meshes) and the workspace margin over MUMPS's estimate in per cent (ICNTL(14))."""
-    return {"mat_mumps_icntl_7": 5, "mat_mumps_icntl_14": int(workspace_percent)}
+@dataclass(frozen=True)
+class Mumps:
+    """How every MUMPS factorisation of the engine is made (PETSc options under the factor's prefix): METIS
+    nested-dissection ordering (ICNTL(7) = 5, which suits 3D meshes), the workspace margin over MUMPS's estimate
+    in per cent (ICNTL(14)), and in or out of core (ICNTL(22) = 1: the factors are written to disk as they are
+    computed, memory holds the fronts being worked on, and each solve reads the factors back, from the page cache
+    while memory allows). The same factors either way."""
+    workspace_percent: int = MUMPS_WORKSPACE_PERCENT
+    out_of_core: bool = False
+
+    def options(self) -> dict:
+        opts = {"mat_mumps_icntl_7": 5, "mat_mumps_icntl_14": int(self.workspace_percent)}
+        if self.out_of_core:
+            out_of_core_directory()
+            opts["mat_mumps_icntl_22"] = 1
+        return opts
 
 
-def block_gauss_seidel_options(rtol: float, max_iterations: int,
-                               workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
+# removes a directory once its stdin closes: when the process holding the pipe's other end has ended
+REAPER = "import shutil, sys; sys.stdin.buffer.read(); shutil.rmtree(sys.argv[1], ignore_errors=True)"
+_reapers: list = []
+
+
+@functools.cache
+def out_of_core_directory() -> str:
+    """The directory this process's MUMPS writes out-of-core factors to, made at the first call in $MUMPS_OOC_TMPDIR
+    or else the temporary directory (tempfile: $TMPDIR, node-local on most clusters) and set as MUMPS_OOC_TMPDIR
+    (MUMPS reads it at each factorisation). A process of its own removes it once this one has ended, however it
+    ends: MUMPS deletes a factor's files only when the factor is destroyed, which an exiting process need not do
+    and a killed one cannot."""
+    path = tempfile.mkdtemp(prefix=f"ureterfsi-mumps-{os.getpid()}-", dir=os.environ.get("MUMPS_OOC_TMPDIR"))
+    os.environ["MUMPS_OOC_TMPDIR"] = path
+    read, write = os.pipe()           # `write` stays open for this process's life: the kernel closes it at its end
+    _reapers.append((write, subprocess.Popen([sys.executable, "-c", REAPER, path], stdin=read,
+                                             start_new_session=True)))
+    os.close(read)
+    return path
+
+
+def block_gauss_seidel_options(rtol: float, max_iterations: int, mumps: Mumps = Mumps()) -> dict:
     """PETSc options (under the KSP prefix) of BlockGaussSeidel: right-preconditioned GMRES (the residual it
-    tests is the true one), multiplicative fieldsplit, MUMPS LU (mumps_options) on every split."""
+    tests is the true one), multiplicative fieldsplit, MUMPS LU (`mumps`) on every split."""
     opts = {"ksp_type": "gmres", "ksp_gmres_restart": 100, "ksp_pc_side": "right", "ksp_rtol": rtol,
             "ksp_atol": 0.0, "ksp_max_it": max_iterations, "ksp_norm_type": "unpreconditioned",
             "pc_type": "fieldsplit", "pc_fieldsplit_type": "multiplicative"}
     for name in SPLITS:
         opts |= {f"fieldsplit_{name}_ksp_type": "preonly", f"fieldsplit_{name}_pc_type": "lu",
                  f"fieldsplit_{name}_pc_factor_mat_solver_type": "mumps"}
-        opts |= {f"fieldsplit_{name}_{k}": v for k, v in mumps_options(workspace_percent).items()}
+        opts |= {f"fieldsplit_{name}_{k}": v for k, v in mumps.options().items()}
     return opts
 
 
-def flow_lu_options(package: str, workspace_percent: int = MUMPS_WORKSPACE_PERCENT) -> dict:
+def flow_lu_options(package: str, mumps: Mumps = Mumps()) -> dict:
     """PETSc options (under the KSP prefix) of the segregated direct solve: PCFieldSplit additive over the
-    splits "mirror" (Jacobi) and "flow" (LU by `package`; mumps_options for MUMPS)."""
+    splits "mirror" (Jacobi) and "flow" (LU by `package`; `mumps` for MUMPS)."""
     opts = {"ksp_type": "preonly", "pc_type": "fieldsplit", "pc_fieldsplit_type": "additive",
             "fieldsplit_mirror_ksp_type": "preonly", "fieldsplit_mirror_pc_type": "jacobi",
             "fieldsplit_flow_ksp_type": "preonly", "fieldsplit_flow_pc_type": "lu",
             "fieldsplit_flow_pc_factor_mat_solver_type": package}
     if package == "mumps":
-        opts |= {f"fieldsplit_flow_{k}": v for k, v in mumps_options(workspace_percent).items()}
+        opts |= {f"fieldsplit_flow_{k}": v for k, v in mumps.options().items()}
     return opts
 
 
@@ -145,10 +183,10 @@ def mumps_status(factor) -> str:
 
 
 class WholeSystemLU(LinearSolver):
-    """LU of the whole Newton system by a direct package (MUMPS with mumps_options)."""
+    """LU of the whole Newton system by a direct package (MUMPS with `mumps`)."""
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, counters: dict,
-                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
+                 mumps: Mumps = Mumps()):
         super().__init__(ksp, counters)
         self.package = package
         ksp.setType("preonly")
@@ -156,7 +194,7 @@ class WholeSystemLU(LinearSolver):
         pc.setType("lu")
         pc.setFactorSolverType(package)
         if package == "mumps":
-            set_options(prefix, mumps_options(workspace_percent))
+            set_options(prefix, mumps.options())
 
     def factor_matrix(self):
         return self.ksp.getPC().getFactorMatrix()
@@ -175,10 +213,10 @@ class FlowBlockLU(LinearSolver):
     the whole-matrix LU took 20-37 s and 4.2 GB.)"""
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, counters: dict,
-                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
+                 mumps: Mumps = Mumps()):
         super().__init__(ksp, counters)
         self.package = package
-        set_options(prefix, flow_lu_options(package, workspace_percent))
+        set_options(prefix, flow_lu_options(package, mumps))
         pc = ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*splits)
@@ -228,7 +266,7 @@ class BlockGaussSeidel(LinearSolver):
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, splits: dict, rtol: float, max_iterations: int,
                  refactorise_iterations: int, counters: dict, timings: dict, kept=("solid", "mesh"),
-                 workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
+                 mumps: Mumps = Mumps()):
         if set(splits) != set(SPLITS) or any(splits[n].getSize() == 0 for n in SPLITS):
             sizes = {n: splits[n].getSize() for n in splits}
             raise ValueError(f"linear_solver 'block_gauss_seidel' needs non-empty splits {SPLITS} (a scene with a "
@@ -237,7 +275,7 @@ class BlockGaussSeidel(LinearSolver):
         if unknown:
             raise ValueError(f"BlockGaussSeidel kept blocks must be among {SPLITS}, got {sorted(unknown)}")
         self.ksp, self.kept, self.refactorise_iterations = ksp, tuple(kept), refactorise_iterations
-        set_options(prefix, block_gauss_seidel_options(rtol, max_iterations, workspace_percent))
+        set_options(prefix, block_gauss_seidel_options(rtol, max_iterations, mumps))
         pc = ksp.getPC()
         pc.setType("fieldsplit")
         pc.setFieldSplitIS(*[(n, splits[n]) for n in SPLITS])

@@ -11,7 +11,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import physics
-from .linear_solvers import MUMPS_WORKSPACE_PERCENT, direct_package, mumps_options, set_options
+from .linear_solvers import Mumps, direct_package, set_options
 
 MISMATCH_LIMIT = 0.05       # PrescribedMap: largest disagreement with the boundary motion, of the displacement
 
@@ -70,7 +70,7 @@ class Extension:
     mismatch = 0.0
 
     def __init__(self, displacement: fem.Function, bcs: list, a, L, comm, *, iterative: bool, package: str,
-                 rtol: float, prefix: str, counters: dict, workspace_percent: int = MUMPS_WORKSPACE_PERCENT):
+                 rtol: float, prefix: str, counters: dict, mumps: Mumps = Mumps()):
         self.displacement, self.bcs, self.counters = displacement, bcs, counters
         self.a, self.L = fem.form(a), fem.form(L)
         A = fem_petsc.assemble_matrix(self.a, bcs=bcs)
@@ -91,7 +91,7 @@ class Extension:
             ksp.getPC().setFactorSolverType(package)
             if package == "mumps":
                 ksp.setOptionsPrefix(prefix)
-                set_options(prefix, mumps_options(workspace_percent))
+                set_options(prefix, mumps.options())
                 ksp.setFromOptions()
 
     def solve(self, t: float, guess: np.ndarray) -> None:
@@ -128,4 +128,4 @@ def segregated_motion(displacement: fem.Function, bcs: list, prescribed, ops, st
     unknowns = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
     return Extension(displacement, bcs, a, L, comm, iterative=limit is not None and unknowns > limit,
                      package=direct_package(options.linear_solver), rtol=options.mesh_motion_rtol, prefix=prefix,
-                     counters=counters, workspace_percent=options.mumps_workspace_percent)
+                     counters=counters, mumps=options.mumps())

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .linear_solvers import MUMPS_WORKSPACE_PERCENT
+from .linear_solvers import MUMPS_WORKSPACE_PERCENT, Mumps
 
 # the values of the options that name a choice
 CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
@@ -47,6 +47,9 @@ class SolverOptions:
     # MUMPS ICNTL(14): workspace margin over MUMPS's estimate, per cent, of every MUMPS factorisation the
     # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
     mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
+    # MUMPS ICNTL(22): every MUMPS factor on disk (out of core) instead of in memory: the same factors, for a fraction
+    # of the memory (a run larger than the memory it was given; study runs: --out-of-core)
+    mumps_out_of_core: bool = False
     # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
     # ICC(0) instead of LU, whose factor is as large as the flow block's; None: always LU
     mesh_motion_direct_max_unknowns: int | None = None
@@ -95,12 +98,17 @@ class SolverOptions:
     # (ureterfsi.fsi.sparsity); "mixed_element" every dof of a cell with every other (the same matrix)
     jacobian_sparsity: str = "couplings"
 
+    def mumps(self) -> Mumps:
+        """How the strategies make their MUMPS factorisations."""
+        return Mumps(self.mumps_workspace_percent, self.mumps_out_of_core)
+
     def coupled_solution(self) -> str:
         """How a coupled scene's step is solved, in words (a run's provenance)."""
+        core = ", MUMPS out of core" if self.mumps_out_of_core else ""
         if self.coupling_scheme == "partitioned":
             return (f"partitioned sweeps wall -> mesh -> urine of the monolithic residual ({self.solid_block} wall LU, "
-                    f"Anderson depth {self.anderson_depth}, {self.sweep_convergence} stop)")
-        return f"Newton + {self.linear_solver}"
+                    f"Anderson depth {self.anderson_depth}, {self.sweep_convergence} stop{core})")
+        return f"Newton + {self.linear_solver}{core}"
 
     def check_choices(self) -> None:
         """ValueError naming the first option of CHOICES whose value is none of its choices."""

@@ -127,9 +127,9 @@ class PartitionedCoupling:
         self.index = pb.layout.split_is(splits)
         self.splits = splits                    # {name: owned local dofs}: a block's entries, gathered by numpy
         self.sizes = {n: self.index[n].getSize() for n in ORDER}
-        prefix, pct = pb.options_prefix, pb.options.mumps_workspace_percent
-        self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", pct) for n in ORDER}
-        self.factors["mesh"] = ComponentFactor(pb.comm, f"{prefix}partitioned_mesh_", pct, [
+        prefix, mumps = pb.options_prefix, pb.options.mumps()
+        self.factors = {n: BlockFactor(pb.comm, f"{prefix}partitioned_{n}_", mumps) for n in ORDER}
+        self.factors["mesh"] = ComponentFactor(pb.comm, f"{prefix}partitioned_mesh_", mumps, [
             np.searchsorted(splits["mesh"], np.intersect1d(splits["mesh"], dofs))
             for dofs in pb.layout.components_owned("displacement")])
         self.condensed = wall is not None
@@ -143,7 +143,7 @@ class PartitionedCoupling:
             mass.assemble()
             pressure = pb.layout.field_owned.get("solid_pressure", np.zeros(0, np.int32))     # P0: cell unknowns
             self.factors["solid"] = CondensedSolidFactor(
-                pb.comm, f"{prefix}partitioned_solid_", pct, splits["solid"], pb.layout.offset, v_pos, u_pos, mass,
+                pb.comm, f"{prefix}partitioned_solid_", mumps, splits["solid"], pb.layout.offset, v_pos, u_pos, mass,
                 mass_eigenvalue_floor(pb, pb.cells(pb.solid_tags)),
                 cell_pos=np.searchsorted(splits["solid"], np.intersect1d(splits["solid"], pressure)))
             mass.destroy()

@@ -254,12 +254,12 @@ class MonolithicFSI:
                                                 self.constraints.dirichlet)
             return BlockGaussSeidel(self.ksp, prefix, self.layout.split_is(splits), o.krylov_rtol,
                                     o.krylov_max_iterations, o.krylov_refactorise_iterations, self.counters,
-                                    self.timings, workspace_percent=o.mumps_workspace_percent)
+                                    self.timings, mumps=o.mumps())
         if self.segregated:
             splits = self.layout.field_is({"mirror": ["displacement"],
                                            "flow": [f for f in self.field_names if f != "displacement"]})
-            return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps_workspace_percent)
-        return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps_workspace_percent)
+            return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps())
+        return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps())
 
     def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
         """The partitioned strategy (fsi.partitioned.partitioned_coupling) on the residual's terms `whole` and

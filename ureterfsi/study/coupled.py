@@ -1,6 +1,7 @@
 """The fully coupled rung: wall, urine and stent in one monolithic ALE Newton system (paper §2)."""
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import partial
 
 import xarray as xr
@@ -17,7 +18,8 @@ from .probes import UreterProbes
 def pose(cfg: dict, spec: RunSpec, settings, mesh, cell_tags, facet_tags) -> pipeline.Posed:
     """The ureter scene of model `spec.model` on the run's mesh and its probes, stress read from the coupled state."""
     scene = ureter_scene(cfg, mesh, cell_tags, facet_tags, axisymmetric=spec.symmetry == "axisymmetric")
-    pb = MonolithicFSI(scene, solver_options(cfg, fully_coupled=True))
+    options = replace(solver_options(cfg, fully_coupled=True), mumps_out_of_core=spec.out_of_core)
+    pb = MonolithicFSI(scene, options)
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
     stent = obs.stent if obs.has_stent else None
     return pipeline.Posed(

@@ -23,6 +23,9 @@ class RunSpec:
     mesh_path: str
     end: float | None = None       # override of time.end (short test runs)
     dt: float | None = None        # override of time.dt
+    # fully coupled: MUMPS's factors on disk (SolverOptions.mumps_out_of_core), for a job given less memory than
+    # its reservation (rule solve); not part of the run's identity: the same factors, the same solution
+    out_of_core: bool = False
 
 
 def solver_options(cfg: dict, fully_coupled: bool = False) -> SolverOptions:

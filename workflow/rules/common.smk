@@ -134,6 +134,16 @@ def solve_mem_mb(fidelity, symmetry, level):
     )
 
 
+def out_of_core(w, resources):
+    """--out-of-core for a fully coupled solve given less memory than it reserves (a local run caps every
+    reservation at the machine's budget): MUMPS then keeps its factors on disk, the same solution in a fraction
+    of the memory (docs/performance.md)."""
+    reserved = solve_mem_mb(w.fidelity, w.symmetry, w.level)
+    if w.fidelity == "fully_coupled" and resources.mem_mb < reserved:
+        return "--out-of-core"
+    return ""
+
+
 def refuse_unmakeable(w):
     """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
     on it, is refused before any job starts, in one line on stderr (an exception here would print a

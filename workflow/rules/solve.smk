@@ -60,8 +60,10 @@ rule solve:
         end=convergence_only_end,
         wall=solve_wall,
         launcher=solve_launcher,
+        out_of_core=out_of_core,
     shell:
         "{params.launcher} -m ureterfsi.study"
         " --run-config {input.config} --model {wildcards.model} --level {wildcards.level}"
         " --symmetry {wildcards.symmetry} --fidelity {wildcards.fidelity} --mesh {input.mesh}"
-        " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall} > {log} 2>&1"
+        " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall} {params.out_of_core}"
+        " > {log} 2>&1"
