@@ -541,3 +541,16 @@ def test_out_of_core_factors_give_the_in_core_solution():
     assert sweeps_ooc == sweeps_inc
     assert max(field_errors(ooc, inc).values()) <= 1e-12, field_errors(ooc, inc)
     assert "MUMPS out of core" in ooc.options.coupled_solution()
+
+
+def test_the_set_up_logs_each_blocks_first_lu(caplog):
+    """The first LU of each block (the set-up's longest work: minutes on the fine ureter) is logged with its size
+    and time, once."""
+    import logging
+    with caplog.at_level(logging.INFO, logger="ureterfsi.fsi"):
+        pb, _ = tube_run(coupling_scheme="partitioned", steps=2, **TOL)
+    lines = [r.getMessage() for r in caplog.records if "first LU" in r.getMessage()]
+    assert sorted(line.split()[0] for line in lines) == ["flow", "mesh", "solid"], lines
+    for line in lines:
+        name, size = line.split()[0], int(line.split()[2])
+        assert size == pb.partitioned.sizes[name], line

@@ -27,6 +27,7 @@ in each Krylov iteration of each Newton iteration (docs/performance.md).
 """
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -49,6 +50,8 @@ from .newton import NewtonDivergence, fields_off, measure_field_increments
 
 # the order of a sweep: the wall first (it drives the flow), then the mesh it moves, then the urine
 ORDER = SPLITS
+
+log = logging.getLogger("ureterfsi.fsi")
 
 
 def stale_factor(norm: float, previous: float | None, options) -> bool:
@@ -205,6 +208,8 @@ class PartitionedCoupling:
                 self.bind_direct(name)
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
+        if pb.counters[f"{name}_factorisations"] == 1:        # the set-up's progress: the first LUs are its longest
+            log.info("%s block: %d unknowns, first LU in %.1f s", name, self.sizes[name], time.perf_counter() - t0)
 
     def _matrix_on_W(self, name: str) -> PETSc.Mat:
         """The Jacobian on W whose block `name` is factorised: the block's own form (the urine's, the condensed
