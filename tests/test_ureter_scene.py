@@ -245,12 +245,11 @@ def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir
     import xarray as xr
 
     from ureterfsi.study.cli import main
-    _, ds = mini
     out = tmp_path / "ooc.nc"
     configs = [str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml")]
     assert main(["--config", *configs, "--model", "3", "--level", "coarse", "--symmetry", "quarter",
                  "--mesh", str(mini_dir / "model3.msh"), "--out", str(out), "--end", "0.04", "--out-of-core"]) == 0
-    with xr.open_dataset(out) as ooc:
+    with xr.open_dataset(out) as ooc, xr.open_dataset(mini_dir / "ureterfsi.study.coupled.nc") as ds:
         assert ooc.attrs["solver"] == ds.attrs["solver"] + ", MUMPS out of core"
         early = ds.sel(time=ooc["time"].values, probe_time=ooc["probe_time"].values)
         early = early.isel(step=range(ooc.sizes["step"]))
