@@ -239,7 +239,7 @@ def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_pa
 
 
 def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir, tmp_path, repo_root):
-    """`python -m ureterfsi.study --out-of-core` (rule solve: a job given less memory than it reserves): MUMPS's
+    """`python -m ureterfsi.study --out-of-core 1` (rule solve: a job given less memory than it reserves): MUMPS's
     factors on disk, the same probes as the in-core run over its first two steps (to round-off), and the dataset
     says how it was solved."""
     import xarray as xr
@@ -248,7 +248,7 @@ def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir
     out = tmp_path / "ooc.nc"
     configs = [str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml")]
     assert main(["--config", *configs, "--model", "3", "--level", "coarse", "--symmetry", "quarter",
-                 "--mesh", str(mini_dir / "model3.msh"), "--out", str(out), "--end", "0.04", "--out-of-core"]) == 0
+                 "--mesh", str(mini_dir / "model3.msh"), "--out", str(out), "--end", "0.04", "--out-of-core", "1"]) == 0
     with xr.open_dataset(out) as ooc, xr.open_dataset(mini_dir / "ureterfsi.study.coupled.nc") as ds:
         assert ooc.attrs["solver"] == ds.attrs["solver"] + ", MUMPS out of core"
         early = ds.sel(time=ooc["time"].values, probe_time=ooc["probe_time"].values)

@@ -123,9 +123,10 @@ def test_physical_memory_is_memtotal(tmp_path):
 
 
 def test_a_fully_coupled_solve_given_less_memory_than_it_reserves_runs_out_of_core():
-    """Rule solve passes --out-of-core to a fully coupled run given less memory than it reserves (a local run caps
-    each reservation at its budget: config/reference.yaml's fine level, 26 000 MiB, here), so that MUMPS keeps its
-    factors on disk; given its reservation (a cluster job), or reserving less than the budget, it runs in core."""
+    """Rule solve passes --out-of-core 1 to a fully coupled run that reserves more than the local budget holds
+    (config/reference.yaml's fine level, 26 000 MiB), so that MUMPS keeps its factors on disk; with a budget that
+    holds its reservation, and for the coarse level, 0. A resource, not a param: another budget does not re-run a
+    finished solve."""
     targets = [f"results/runs/fully_coupled/quarter/model3_{level}.nc" for level in ("coarse", "fine")]
     reserved = yaml.safe_load((REPO / "config/reference.yaml").read_text())["study"]["memory_mb"]["fully_coupled"]
     for budget in (reserved["fine"] - 1, reserved["fine"]):
@@ -135,5 +136,5 @@ def test_a_fully_coupled_solve_given_less_memory_than_it_reserves_runs_out_of_co
         commands = {level: [ln for ln in run.stdout.splitlines() if "-m ureterfsi.study" in ln and
                             f"--level {level} " in ln] for level in ("coarse", "fine")}
         assert all(len(c) == 1 for c in commands.values()), commands
-        assert ("--out-of-core" in commands["fine"][0]) == (budget < reserved["fine"]), commands
-        assert "--out-of-core" not in commands["coarse"][0]
+        assert f"--out-of-core {int(budget < reserved['fine'])}" in commands["fine"][0], commands
+        assert "--out-of-core 0" in commands["coarse"][0]

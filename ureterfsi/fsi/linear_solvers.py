@@ -88,6 +88,7 @@ class Mumps:
     out_of_core: bool = False
 
     def options(self) -> dict:
+        """The PETSc options; out of core, this process's scratch directory is made first (out_of_core_directory)."""
         opts = {"mat_mumps_icntl_7": 5, "mat_mumps_icntl_14": int(self.workspace_percent)}
         if self.out_of_core:
             out_of_core_directory()

@@ -48,7 +48,7 @@ class SolverOptions:
     # strategies create (whole system, flow block, each block_gauss_seidel split, the mesh-motion LU)
     mumps_workspace_percent: int = MUMPS_WORKSPACE_PERCENT
     # MUMPS ICNTL(22): every MUMPS factor on disk (out of core) instead of in memory: the same factors, for a fraction
-    # of the memory (a run larger than the memory it was given; study runs: --out-of-core)
+    # of the memory (a run larger than the memory it was given; study runs: --out-of-core 1)
     mumps_out_of_core: bool = False
     # segregated mesh-motion problems with more unknowns than this are solved by conjugate gradients with
     # ICC(0) instead of LU, whose factor is as large as the flow block's; None: always LU

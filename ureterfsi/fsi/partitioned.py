@@ -209,7 +209,7 @@ class PartitionedCoupling:
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
         if pb.counters[f"{name}_factorisations"] == 1:        # the set-up's progress: the first LUs are its longest
-            log.info("%s block: %d unknowns, first LU in %.1f s", name, self.sizes[name], time.perf_counter() - t0)
+            log.info("%s block: %d unknowns, first Jacobian and LU in %.1f s", name, self.sizes[name], time.perf_counter() - t0)
 
     def _matrix_on_W(self, name: str) -> PETSc.Mat:
         """The Jacobian on W whose block `name` is factorised: the block's own form (the urine's, the condensed

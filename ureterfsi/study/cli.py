@@ -58,9 +58,9 @@ def main(argv=None) -> int:
     ap.add_argument("--fidelity", choices=FIDELITIES, default="fully_coupled",
                     help="fully_coupled (monolithic ALE FSI) or one_way (wall -> urine -> stent, "
                          "ureterfsi.study.oneway)")
-    ap.add_argument("--out-of-core", action="store_true",
-                    help="fully_coupled: MUMPS writes its factors to disk (a job given less memory than the run needs; "
-                         "the same solution, slower)")
+    ap.add_argument("--out-of-core", type=int, choices=(0, 1), default=0,
+                    help="fully_coupled: 1, MUMPS writes its factors to disk (a job given less memory than the run "
+                         "needs; the same solution, slower)")
     args = ap.parse_args(argv)
     configure_logging()
     try:
@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     except ConfigError as err:
         print(err, file=sys.stderr)
         return 2
-    spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt, args.out_of_core)
+    spec = RunSpec(args.model, args.level, args.symmetry, args.mesh, args.end, args.dt, bool(args.out_of_core))
     try:
         solve(cfg, spec, args.fidelity, args.out, args.checkpoint, args.wall)
     except (BadFile, SolveFailure) as err:

@@ -134,14 +134,17 @@ def solve_mem_mb(fidelity, symmetry, level):
     )
 
 
-def out_of_core(w, resources):
-    """--out-of-core for a fully coupled solve given less memory than it reserves (a local run caps every
-    reservation at the machine's budget): MUMPS then keeps its factors on disk, the same solution in a fraction
-    of the memory (docs/performance.md)."""
+def out_of_core(w):
+    """1 for a fully coupled solve that reserves more memory than the local budget holds (a local run caps its
+    reservation at the budget): MUMPS then keeps its factors on disk, the same solution in a fraction of the
+    memory (docs/performance.md); else 0. A resource, not a param: it does not change the solution, so a changed
+    budget must not re-run a finished solve (params are a rerun trigger)."""
+    budget = workflow.global_resources.get("mem_mb")
+    budget = getattr(budget, "raw", budget)
     reserved = solve_mem_mb(w.fidelity, w.symmetry, w.level)
-    if w.fidelity == "fully_coupled" and resources.mem_mb < reserved:
-        return "--out-of-core"
-    return ""
+    return int(
+        w.fidelity == "fully_coupled" and budget is not None and reserved > int(budget)
+    )
 
 
 def refuse_unmakeable(w):

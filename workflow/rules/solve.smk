@@ -55,15 +55,16 @@ rule solve:
         mpi=solve_mpi,
         mem_mb=lambda w: solve_mem_mb(w.fidelity, w.symmetry, w.level),
         runtime=24 * 60,
+        mumps_out_of_core=out_of_core,
     params:
         checkpoint="results/checkpoints/{fidelity}/{symmetry}/model{model}_{level}.npz",
         end=convergence_only_end,
         wall=solve_wall,
         launcher=solve_launcher,
-        out_of_core=out_of_core,
     shell:
         "{params.launcher} -m ureterfsi.study"
         " --run-config {input.config} --model {wildcards.model} --level {wildcards.level}"
         " --symmetry {wildcards.symmetry} --fidelity {wildcards.fidelity} --mesh {input.mesh}"
-        " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall} {params.out_of_core}"
+        " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall}"
+        " --out-of-core {resources.mumps_out_of_core}"
         " > {log} 2>&1"
