@@ -27,6 +27,22 @@ def run_path(results: Path, fidelity: str, symmetry: str, model: str, level: str
     return results / "runs" / fidelity / symmetry / f"model{model}_{level}.nc"
 
 
+def common_span(runs: dict) -> dict:
+    """Every run cut to the shortest run's end (the coarse level goes on to 3 s for the other figures), so each
+    level's error is over the same span."""
+    end = min(float(ds["time"].values[-1]) for ds in runs.values()) + 1e-9
+    return {k: ds.sel(time=ds["time"] <= end, probe_time=ds["probe_time"] <= end) for k, ds in runs.items()}
+
+
+def error_table(title: str, pairs: dict, quantities: list[str]) -> list[str]:
+    """Markdown rows of relative_error(ref, run) per quantity, one column per (ref, run) pair."""
+    lines = ["", title, "", "| quantity | " + " | ".join(pairs) + " |", "|---|" + "---|" * len(pairs)]
+    for q in quantities:
+        lines.append(f"| {q} | " + " | ".join(f"{relative_error(ref, run, q):.2e}" for ref, run in pairs.values())
+                     + " |")
+    return lines
+
+
 def tables(runs: dict, levels: list[str]) -> str:
     """Markdown: cost per run, the one-way error per level, and each rung's error against its finest level."""
     quantities = [q for q in QUANTITIES if all(q in ds for ds in runs.values())]
@@ -36,18 +52,13 @@ def tables(runs: dict, levels: list[str]) -> str:
         wall = float(ds.attrs["wall_time_s"])
         lines.append(f"| {rung} | {level} | {ds.attrs.get('cells', '-')} | {ds.attrs.get('dofs', '-')} | "
                      f"{ds.attrs.get('processes', '-')} | {steps} | {wall:.0f} | {wall / steps:.1f} |")
-    lines += ["", "One-way error against the fully coupled run of the same level:", "",
-              "| quantity | " + " | ".join(levels) + " |", "|---|" + "---|" * len(levels)]
-    for q in quantities:
-        errs = [relative_error(runs["fully_coupled", lv], runs["one_way", lv], q) for lv in levels]
-        lines.append(f"| {q} | " + " | ".join(f"{e:.2e}" for e in errs) + " |")
+    runs = common_span(runs)
+    lines += error_table("One-way error against the fully coupled run of the same level (common span):",
+                         {lv: (runs["fully_coupled", lv], runs["one_way", lv]) for lv in levels}, quantities)
     finest = levels[-1]
     for rung in RUNGS:
-        lines += ["", f"{rung}: each level against its {finest} level:", "",
-                  "| quantity | " + " | ".join(levels[:-1]) + " |", "|---|" + "---|" * (len(levels) - 1)]
-        for q in quantities:
-            errs = [relative_error(runs[rung, finest], runs[rung, lv], q) for lv in levels[:-1]]
-            lines.append(f"| {q} | " + " | ".join(f"{e:.2e}" for e in errs) + " |")
+        lines += error_table(f"{rung}: each level against its {finest} level:",
+                             {lv: (runs[rung, finest], runs[rung, lv]) for lv in levels[:-1]}, quantities)
     return "\n".join(lines)
 
 
