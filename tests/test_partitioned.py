@@ -23,6 +23,7 @@ from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.block_factors import BlockFactor
 from ureterfsi.fsi.linear_solvers import Mumps
 from ureterfsi.fsi.block_jacobian import BlockJacobian, field_components, field_space
+from ureterfsi.fsi.partitioned import direct_jacobian, direction
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 
@@ -517,6 +518,43 @@ def test_a_field_space_maps_its_dofs_to_the_mixed_spaces(names):
     components = field_components(V, names, ufl.TestFunction)
     assert [len(components[n]) for n in names] == [1 if n == "pressure" else 2 for n in names]
 
+
+
+def test_a_block_jacobian_is_posed_on_its_fields_after_a_compilation_changed_the_mesh(tmp_path):
+    """direct_jacobian replaces the Jacobian's test function on W by the rows' fields' also when ffcx has compiled a
+    form on the mesh in between (which gives the mesh's coordinate element another variant, so a TestFunction(W)
+    hashed after it differs from one hashed before): the block form's arguments are on the field spaces, and its
+    matrix is the block of the matrix on W."""
+    square = dmesh.create_unit_square(MPI.COMM_WORLD, 3, 2)
+    cell = square.ufl_cell()
+    vector = ufl.VectorElement("Lagrange", cell, 2)
+    names = ["velocity", "displacement", "pressure"]
+    W = fem.FunctionSpace(square, ufl.MixedElement([vector, vector, ufl.FiniteElement("Lagrange", cell, 1)]))
+    pb = SimpleNamespace(W=W, field_names=names, index={n: i for i, n in enumerate(names)})
+    w = fem.Function(W)
+    w.sub(0).interpolate(lambda x: np.vstack([x[0] ** 2, x[0] * x[1]]))
+    w.sub(1).interpolate(lambda x: np.vstack([x[1], 1 + x[0]]))
+    w.sub(2).interpolate(lambda x: 2 - x[1])
+    v, u, p = ufl.split(w)
+    dv, du, dp = ufl.split(ufl.TestFunction(W))
+    residual = (ufl.inner(ufl.grad(v) * v, dv) + p * ufl.div(dv) + ufl.inner(ufl.grad(u), ufl.grad(du))
+                + ufl.div(v) * dp) * ufl.dx
+    hash(residual), [hash(a) for a in residual.arguments()]          # as the engine's forms are, when compiled
+    fem.form(ufl.inner(ufl.grad(w), ufl.grad(w)) * ufl.dx, jit_params={"cache_dir": str(tmp_path)})   # compiled
+    flow = {"velocity": lambda f: f["velocity"], "pressure": lambda f: f["pressure"]}
+    block = direct_jacobian(pb, ["velocity", "pressure"], ["velocity", "pressure"],
+                            lambda trial: ufl.derivative(residual, w, direction(pb, flow, trial)))
+    V_rows, _ = field_space(W, names, ["velocity", "pressure"])
+    size = V_rows.dofmap.index_map.size_global * V_rows.dofmap.index_map_bs
+    assert [V.dofmap.index_map.size_global * V.dofmap.index_map_bs for V in block.form.function_spaces] == [size] * 2
+    A = fem_petsc.assemble_matrix(block.form)
+    A.assemble()
+    J = fem_petsc.assemble_matrix(fem.form(ufl.derivative(residual, w, direction(pb, flow))))
+    J.assemble()
+    rows = PETSc.IS().createGeneral(block.row_to_W.astype(PETSc.IntType))
+    cols = PETSc.IS().createGeneral(block.col_to_W.astype(PETSc.IntType))
+    on_W = J.createSubMatrix(rows, cols).convert("dense").getDenseArray()
+    assert np.abs(A.convert("dense").getDenseArray() - on_W).max() <= 1e-12 * np.abs(on_W).max()
 
 def test_out_of_core_factors_give_the_in_core_solution():
     """SolverOptions.mumps_out_of_core: every MUMPS factor of the partitioned scheme (the wall's and its mass's, the

@@ -509,12 +509,22 @@ def direction(pb, components: dict, fields: dict | None = None):
 
 def direct_jacobian(pb, rows: list, cols: list, jacobian) -> BlockJacobian:
     """The block Jacobian `jacobian`(trial) (a form on W along a direction in W made of `trial`, {field:
-    components}) posed on the fields `rows` (test) and `cols` (trial) alone (fsi.block_jacobian)."""
+    components}) posed on the fields `rows` (test) and `cols` (trial) alone (fsi.block_jacobian).
+
+    The form's own test function is the one replaced, not an equal one built here: ffcx, when it compiles a form,
+    gives the mesh's coordinate element another variant (ffcx.analysis._analyze_form), which changes the hash of
+    every argument hashed after it, so a new TestFunction(W) would miss the form's in ufl.replace's map, silently."""
     V_rows, row_to_W = field_space(pb.W, pb.field_names, rows)
     V_cols, col_to_W = field_space(pb.W, pb.field_names, cols)
     test = direction(pb, {n: (lambda f, n=n: f[n]) for n in rows},
                      field_components(V_rows, rows, ufl.TestFunction))
-    form = ufl.replace(jacobian(field_components(V_cols, cols, ufl.TrialFunction)), {ufl.TestFunction(pb.W): test})
+    on_W = jacobian(field_components(V_cols, cols, ufl.TrialFunction))
+    tests = [a for a in on_W.arguments() if a.number() == 0]
+    if len(tests) != 1 or tests[0].ufl_function_space() != pb.W.ufl_function_space():
+        raise ValueError(f"the block Jacobian {rows} x {cols} has no test function on the mixed space to replace")
+    form = ufl.replace(on_W, {tests[0]: test})
+    if any(a.ufl_function_space() == pb.W.ufl_function_space() for a in form.arguments()):
+        raise RuntimeError(f"the block Jacobian {rows} x {cols} kept an argument on the mixed space")
     return BlockJacobian(fem.form(form), row_to_W, col_to_W)
 
 
