@@ -3,7 +3,13 @@ linear field (exact), von Mises stress of known stress states, location of a cel
 the volumetric flux of a prescribed velocity through a boundary with the study's Nanson-form integrand."""
 from __future__ import annotations
 
+import json
 import math
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import gmsh
 import numpy as np
@@ -49,6 +55,78 @@ def test_point_probe_accepts_2d_points():
     pts = np.array([[0.2, 0.7], [0.9, 0.1]])
     np.testing.assert_allclose(PointProbe(square, pts)(f)[:, 0], 3 * pts[:, 0] + pts[:, 1], atol=1e-12)
 
+
+
+def _cells_holding(msh, point, tol=1e-12):
+    """The local cells of a triangle mesh whose closure holds `point` (barycentric coordinates >= -tol)."""
+    x, dofmap = msh.geometry.x[:, :2], msh.geometry.dofmap
+    found = []
+    for c in range(msh.topology.index_map(2).size_local + msh.topology.index_map(2).num_ghosts):
+        a, b, d = x[dofmap.links(c)]
+        lam = np.linalg.solve(np.c_[b - a, d - a], point - a)
+        if min(lam.min(), 1 - lam.sum()) >= -tol:
+            found.append(c)
+    return found
+
+
+def test_point_probe_takes_the_mean_of_a_cell_field_over_the_cells_of_a_point():
+    """A piecewise-constant field (a different value on each cell) probed inside a cell, on a face, at a vertex:
+    the cell's value, the mean of the two, the mean of all the vertex's cells (the brute-force point-in-triangle
+    search here); with `within`, the mean over those cells only and NaN in none of them."""
+    square = dmesh.create_unit_square(MPI.COMM_SELF, 2, 2)
+    f = fem.Function(fem.FunctionSpace(square, ("DG", 0)))
+    f.interpolate(lambda x: x[0] + 10.0 * x[1] + 100.0 * x[0] * x[1])      # distinct on every cell
+    pts = np.array([[0.2, 0.1], [0.5, 0.25], [0.5, 0.5], [0.25, 0.5], [0.75, 0.75]])
+    got = PointProbe(square, pts)(f)[:, 0]
+    holding = [_cells_holding(square, p) for p in pts]
+    assert [len(h) for h in holding] == [1, 2, 6, 2, 2]                        # a cell, faces, a vertex
+    for value, cells in zip(got, holding):
+        assert value == pytest.approx(np.mean(f.x.array[cells]), abs=1e-13)
+    lower = np.flatnonzero(dmesh.compute_midpoints(square, 2, np.arange(8, dtype=np.int32))[:, 1] < 0.5)
+    within = PointProbe(square, pts, within=lower)(f)[:, 0]
+    for value, cells in zip(within, holding):
+        kept = [c for c in cells if c in lower]
+        assert np.isnan(value) if not kept else value == pytest.approx(np.mean(f.x.array[kept]), abs=1e-13)
+    assert np.isnan(within[-1]) and not np.isnan(within[1])
+
+
+_PROBE_DRIVER = """
+import json, sys
+import numpy as np
+from mpi4py import MPI
+from dolfinx import fem, mesh as dmesh
+sys.path.insert(0, {src!r})
+from ureterfsi.probes import PointProbe
+cube = dmesh.create_unit_cube(MPI.COMM_WORLD, 4, 4, 4)
+f = fem.Function(fem.FunctionSpace(cube, ("DG", 1)))
+f.interpolate(lambda x: np.sin(7 * x[0]) + x[1] * x[2] + np.floor(4 * x[0]))      # jumps across cell faces
+z = np.linspace(0.0, 1.0, 41)
+pts = np.c_[0.25 + 0 * z, 0.5 + 0 * z, z]                                     # on faces, edges and vertices
+pts = np.vstack([pts, [[0.1, 0.2, 0.3], [0.5, 0.5, 0.5], [1.5, 0.5, 0.5]]])
+values = PointProbe(cube, pts)(f)[:, 0]
+if MPI.COMM_WORLD.rank == 0:
+    json.dump([None if np.isnan(v) else float(v) for v in values], open({out!r}, "w"))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(shutil.which("mpiexec") is None, reason="mpiexec not installed")
+def test_point_probe_values_do_not_depend_on_the_partition(tmp_path):
+    """A discontinuous field probed along a line of cell faces, edges and vertices: the same values on 1 and 2
+    processes (the first colliding cell of the lowest rank, the rule before the mean, gave the partition's)."""
+    results = {}
+    for n in (1, 2):
+        out = tmp_path / f"np{n}.json"
+        script = tmp_path / "driver.py"
+        script.write_text(_PROBE_DRIVER.format(src=str(Path(__file__).resolve().parent.parent), out=str(out)))
+        proc = subprocess.run(["mpiexec", "-n", str(n), "--allow-run-as-root", "--oversubscribe", sys.executable,
+                               str(script)], capture_output=True, text=True, timeout=600,
+                              env=dict(os.environ, OMPI_MCA_rmaps_base_oversubscribe="1"))
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        results[n] = json.loads(out.read_text())
+    assert results[1][-1] is None and results[2][-1] is None                  # outside the mesh
+    one, two = np.array(results[1][:-1], dtype=float), np.array(results[2][:-1], dtype=float)
+    np.testing.assert_allclose(two, one, rtol=0, atol=1e-12 * np.abs(one).max())
 
 @pytest.mark.parametrize("state, expected", [
     ("uniaxial", 7.0),                     # sigma = s e1 (x) e1 -> s
@@ -197,7 +275,7 @@ def test_wall_line_lies_on_the_outer_facets(tmp_path, repo_root, symmetry, fract
     z = np.linspace(0.0, geom.length, 201)
     pts, cells = surface_line_points(msh, ft.find(tags.URETER_OUTER), z, axisymmetric)
     probe = PointProbe(msh, pts[:, :msh.geometry.dim], cells)
-    assert np.all(probe.owner < COMM.size)                        # every point on a facet of some rank
+    assert probe.missing.size == 0                                # every point on a facet of some rank
     a = lambda zz: 1e-4 * np.exp(-((zz - 0.004) / 0.0015) ** 2)  # noqa: E731  (peak on the stricture's flank)
     u = fem.Function(fem.VectorFunctionSpace(msh, ("CG", 2)))
     if axisymmetric:

@@ -32,12 +32,15 @@ def inside_radius(mesh, radius: float, x_axis: float = 0.0):
 class PointProbe:
     """Evaluate functions at fixed reference points; every rank gets the full result.
 
-    Points outside the mesh give NaN. Points on a partition boundary are evaluated by the lowest
-    rank that holds a colliding cell. `cells`: a local cell holding each point (-1: none on this rank) instead of
-    the collision search, whose tolerance misses points on a faceted boundary (surface_line_points).
+    A point in several cells (on a face, an edge or a vertex) takes the mean of its cells' values: a discontinuous
+    field (a cell field, CellField) is several-valued there, and the mean depends neither on the partition nor on the
+    cell numbering (a continuous field has one value). `within`: the local cells on which the functions are
+    defined (e.g. a CellField's), the only ones a point's mean is over; all by default. Points in none give NaN.
+    `cells`: a local cell holding each point (-1: none on this rank) instead of the collision search, whose
+    tolerance misses points on a faceted boundary (surface_line_points).
     """
 
-    def __init__(self, mesh, points: np.ndarray, cells: np.ndarray | None = None):
+    def __init__(self, mesh, points: np.ndarray, cells: np.ndarray | None = None, within: np.ndarray | None = None):
         pts = np.zeros((len(points), 3))
         pts[:, : np.asarray(points).shape[1]] = points
         self.points, self.comm = pts, mesh.comm
@@ -49,30 +52,32 @@ class PointProbe:
         else:
             links = [[c] if c >= 0 else [] for c in cells]
         n_local = mesh.topology.index_map(mesh.topology.dim).size_local
-        self.local, self.cells = [], []
-        for i in range(len(pts)):
-            owned = [c for c in links[i] if c < n_local]
-            if owned:
-                self.local.append(i)
-                self.cells.append(owned[0])
-        self.local = np.array(self.local, dtype=np.int64)
-        self.cells = np.array(self.cells, dtype=np.int32)
-        have = np.full(len(pts), self.comm.size, dtype=np.int32)
-        have[self.local] = self.comm.rank
-        self.owner = np.zeros_like(have)
-        self.comm.Allreduce(have, self.owner, op=MPI.MIN)
-        self.mine = self.local[self.owner[self.local] == self.comm.rank]
-        self.mine_cells = self.cells[self.owner[self.local] == self.comm.rank]
+        allowed = None if within is None else set(np.asarray(within, dtype=np.int64).tolist())
+        pairs = [(i, c) for i in range(len(pts)) for c in links[i]
+                 if c < n_local and (allowed is None or c in allowed)]
+        self.pair_points = np.array([i for i, _ in pairs], dtype=np.int64)
+        self.pair_cells = np.array([c for _, c in pairs], dtype=np.int32)
+        local = np.bincount(self.pair_points, minlength=len(pts)).astype(np.int64)
+        self.count = np.zeros_like(local)
+        self.comm.Allreduce(local, self.count, op=MPI.SUM)
+
+    @property
+    def missing(self) -> np.ndarray:
+        """Indices of the points in no cell (of `within`) on any rank."""
+        return np.flatnonzero(self.count == 0)
 
     def __call__(self, f: fem.Function) -> np.ndarray:
-        """Values of f at the points, shape (npoints, value_size)."""
+        """Values of f at the points, shape (npoints, value_size): the mean over each point's cells."""
         size = int(np.prod(f.ufl_shape)) if f.ufl_shape else 1
         out = np.zeros((len(self.points), size))
-        if self.mine.size:
-            out[self.mine] = f.eval(self.points[self.mine], self.mine_cells).reshape(len(self.mine), size)
+        if self.pair_points.size:
+            values = f.eval(self.points[self.pair_points], self.pair_cells).reshape(len(self.pair_points), size)
+            np.add.at(out, self.pair_points, values)
         total = np.zeros_like(out)
         self.comm.Allreduce(out, total, op=MPI.SUM)
-        total[self.owner == self.comm.size] = np.nan
+        found = self.count > 0
+        total[found] /= self.count[found, None]
+        total[~found] = np.nan
         return total
 
 

@@ -29,13 +29,14 @@ from pathlib import Path
 import gmsh
 import numpy as np
 import ufl
-from dolfinx import fem, geometry
+from dolfinx import fem
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
 from ureterfsi.fsi import (DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI, NewtonDivergence,
                            NewtonianFluid, OpenBoundary, Scene, SolidRegion, SolverOptions)
 from ureterfsi.fsi import physics
+from ureterfsi.probes import PointProbe
 
 
 # --- geometry and tags --------------------------------------------------------------------------
@@ -277,22 +278,11 @@ def make_scene(mesh, cell_tags, facet_tags, params: FSI1 = FSI1(), tags: Tags = 
 
 # --- quantities -------------------------------------------------------------------------------------
 def point_value(f: fem.Function, point) -> np.ndarray:
-    """Value of f at a point (MPI-safe: evaluated on the lowest rank owning a containing cell)."""
-    mesh = f.function_space.mesh
-    tdim = mesh.topology.dim
-    p = np.zeros((1, 3))
-    p[0, :len(point)] = point
-    tree = geometry.BoundingBoxTree(mesh, tdim)
-    candidates = geometry.compute_collisions(tree, p)
-    cells = geometry.compute_colliding_cells(mesh, candidates, p).links(0)
-    nloc = mesh.topology.index_map(tdim).size_local
-    cells = cells[cells < nloc]
-    value = np.asarray(f.eval(p, cells[:1])).reshape(-1) if cells.size else None
-    values = mesh.comm.allgather(value)
-    for v in values:
-        if v is not None:
-            return np.asarray(v)
-    raise ValueError(f"point {point} lies outside the mesh")
+    """Value of f at a point, on every rank (probes.PointProbe)."""
+    value = PointProbe(f.function_space.mesh, np.asarray([point], dtype=float))(f)[0]
+    if np.isnan(value).any():
+        raise ValueError(f"point {point} lies outside the mesh")
+    return value
 
 
 class ObstacleForces:

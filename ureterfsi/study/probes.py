@@ -48,7 +48,7 @@ class CoupledWall:
         pts, cells = surface_line_points(pb.mesh, pb.scene.facet_tags.find(tags.URETER_OUTER), z,
                                          pb.scene.axisymmetric)
         self.pb, self.probe = pb, PointProbe(pb.mesh, pts[:, :pb.mesh.geometry.dim], cells)
-        missing = np.flatnonzero(self.probe.owner == pb.comm.size)
+        missing = self.probe.missing
         if missing.size:
             raise ValueError(f"{missing.size} of {len(z)} wall probe points (z = {z[missing[0]]:.6g} m, ...) meet no "
                              f"outer-wall facet on the meridian y = 0, x > 0")
@@ -70,8 +70,9 @@ class CoupledStent:
         if stent.kinematics != "linear":
             F = physics.deformation_gradient(pb.ops, u)
             sigma = sigma * F.T / ufl.det(F)
-        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, pb.cells([tags.STENT]))
-        self.probe = PointProbe(pb.mesh, probe_points)
+        stent_cells = pb.cells([tags.STENT])
+        self.von_mises = CellField(pb.mesh, von_mises(sigma), 1, stent_cells)
+        self.probe = PointProbe(pb.mesh, probe_points, within=stent_cells)
 
     def update(self, pb: MonolithicFSI) -> None:
         self.von_mises.update()
