@@ -1,4 +1,4 @@
-"""The one-way rung against the fully coupled model at every level of the mesh study (issue 15: does the one-way
+"""The one-way rung against the fully coupled model at every level of the mesh study (does the one-way
 rung hold at the medium and fine meshes, not only at the coarse one where the ladder measures it?).
 
 Reads the mesh study's runs of both rungs, as the workflow makes them (`results/runs/{fidelity}/{symmetry}/

@@ -2,7 +2,7 @@
 
 Reads a Snakemake log (default: the newest under .snakemake/log/ that executed jobs) and prints every job
 with its start, end and duration, the slot (core) it ran in, the busy time of each slot, the total elapsed
-time, and the chain of jobs that ended last (what the run waited for). The performance target of issue 5
+time, and the chain of jobs that ended last (what the run waited for). The performance target
 (the default reproduction in at most 30 min on the 2-core machine) is read off this table, never timed in a test.
 
     python benchmarks/reproduction.py                      # newest run

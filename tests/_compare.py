@@ -1,6 +1,6 @@
 """Equality of results that went through the same arithmetic, to the rounding it can carry.
 
-Two runs of the same code on the same data are not promised to agree bit for bit (issue 14 §5), and a sum
+Two runs of the same code on the same data are not promised to agree bit for bit, and a sum
 over many cancelling terms (a flux through a hole) shows it first. The tolerance is a few units in the last
 place of the quantity's scale, |a - b| <= ulps * eps * max|b|, never a relative tolerance per element.
 """

@@ -31,7 +31,7 @@ MODEL4 = {"label": "x", "stent": True, "hole_pair_spacing": 0.025, "holes": 6}
 BAD = [
     # ---- schema: missing, type, range, unknown key, enum
     ("geometry.length", DELETE, "geometry.length", "required key is missing"),
-    # ---- fidelity ladder and per-model runs (issue 5)
+    # ---- fidelity ladder and per-model runs
     ("study.fidelity", "two_way", "study.fidelity", "must be one of"),
     ("study.runs", {"7": {"fidelity": "one_way"}}, "study.runs.7", "must be a key of models"),
     ("study.runs", {"3": {"symmetry": "axisymmetric"}}, "study.runs.3.symmetry", "only valid for a model without stent"),

@@ -1,4 +1,4 @@
-"""A catalogue of bad configurations of the kinds people make (issue 14), each an overlay on config/config.yaml
+"""A catalogue of bad configurations of the kinds people make, each an overlay on config/config.yaml
 refused at the edge with one line naming the key and the constraint: by ureterfsi.config (read_yaml +
 validate_config), by its command line `python -m ureterfsi.config check`, and (a few, slow) by `snakemake -n`
 before any job starts. Also: a target the configuration cannot make is refused by the dry run in one line; a

@@ -1,4 +1,4 @@
-"""Design studies, issue 13, "trust at every point" (ureterfsi.rung_check): the corners of a study's design space,
+"""Design studies, "trust at every point" (ureterfsi.rung_check): the corners of a study's design space,
 the region they check, the corners' configurations on the 10 mm segment, the dataset's rung errors from synthetic
 run files, and the corner jobs of a dry run. The end to end run is tests/test_designs.py's 2 x 2 grid."""
 from __future__ import annotations

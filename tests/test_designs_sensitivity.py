@@ -1,4 +1,4 @@
-"""Design studies, issue 13: the two-parameter map figure and Sobol' indices of a Saltelli design (SALib): the
+"""Design studies: the two-parameter map figure and Sobol' indices of a Saltelli design (SALib): the
 expansion, the refusals, the indices through the design dataset, the Ishigami function's exact indices, and the
 figures drawn from datasets of known values."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The pinned environment (issue 17 §5): workflow/envs/lock.txt covers requirements.txt, is current, and the
+"""The pinned environment: workflow/envs/lock.txt covers requirements.txt, is current, and the
 venv this suite runs in has exactly its versions; Debian's side is stated in workflow/envs/debian.txt."""
 import hashlib
 import re

@@ -1,4 +1,4 @@
-"""Sub-problem mode: the fluid alone on a domain whose boundary moves as prescribed (issue 3).
+"""Sub-problem mode: the fluid alone on a domain whose boundary moves as prescribed.
 
 An axisymmetric tube of radius R, closed at z = 0 (no slip), open at z = L; its wall expands
 uniformly, R(t) = R0 (1 + a sin(omega t)). Mass conservation: the outflow through the open end equals
@@ -165,7 +165,7 @@ def test_prescribed_ale_map():
 def test_a_swapped_mesh_motion_is_the_one_a_scene_poses():
     """use_mesh_motion (the one-way rung's auto fallback) leaves the problem a scene with that motion poses: the
     same run, the same arithmetic; a monolithic problem has no segregated motion to swap. Compared within 4 ulps
-    of each quantity's scale, not bit for bit (issue 14 item 5): two separate factorisations and solves of the same
+    of each quantity's scale, not bit for bit: two separate factorisations and solves of the same
     systems agree bit for bit only while the BLAS under MUMPS reduces in the same order, which threaded OpenBLAS
     on a loaded machine does not promise."""
     q_ext, _, pe = run(2e-3, 4, "segregated")

@@ -1,4 +1,4 @@
-"""Corrupt or foreign pipeline files fail with one line `<path>: <what is wrong>` (issue 14, part 2)."""
+"""Corrupt or foreign pipeline files fail with one line `<path>: <what is wrong>`."""
 from __future__ import annotations
 
 import netCDF4  # noqa: F401  (before dolfinx)
@@ -137,7 +137,7 @@ def test_bad_sidecar(rz_mesh, tmp_path):
 
 # ------------------------------------------------------------------------------------ checkpoint identity
 def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root, monkeypatch, caplog):
-    """Issue 14 part 1: a run with peak_traction 5e4 stopped after its first checkpoint, then the same
+    """A run with peak_traction 5e4 stopped after its first checkpoint, then the same
     target with 1e5: the stale checkpoint is set aside, the run starts at t = 0 and equals a clean 1e5 run."""
     import logging
 

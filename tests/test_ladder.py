@@ -1,4 +1,4 @@
-"""Fidelity ladder (issue 5): errors of a rung against the reference, scene choices, dataset, table, figure.
+"""Fidelity ladder: errors of a rung against the reference, scene choices, dataset, table, figure.
 
 Runs are built by the study's own probes_dataset from analytic values (tests/test_aggregate_figures.py):
 a rung that equals the reference has error 0; a rung scaled by (1 + eps) has error eps for every quantity;

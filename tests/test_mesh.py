@@ -243,7 +243,7 @@ def test_invalid_hole_layout_raises(cfg, tmp_path, key, value, match):
         build_mesh(bad, "2", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
 
 
-# ------------------------------------------------------------------------------------------ stricture (issue 13)
+# ------------------------------------------------------------------------------------------ stricture
 # the 10 mm segment's coarse meshes as built before the stricture existed (commit 2eb6a24): cells, nodes and the
 # first 16 hex digits of the .msh file's SHA-256
 UNSTRICTURED = {("3", "quarter"): (13722, 3079, "0b217fb0b7592e08"),

@@ -59,7 +59,7 @@ def _checkpointed_and_not(tmp_path, **options):
 
 def test_the_result_does_not_depend_on_the_jacobian_history(tmp_path):
     """With the field test a run with checkpoints equals one without to the field tolerance; with the residual
-    test alone it did not (the default model 3 run after its first checkpoint, issue 16: 1.5e-4 in the hole
+    test alone it did not (the default model 3 run after its first checkpoint: 1.5e-4 in the hole
     velocity, docs/performance.md)."""
     with_ckpt, without = _checkpointed_and_not(tmp_path, newton_field_rtol=1e-6)
     errors = field_errors(with_ckpt, without)

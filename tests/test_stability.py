@@ -1,4 +1,4 @@
-"""Stability at the extremes (issue 5): the CI subset of the stability matrix (ureterfsi.stability).
+"""Stability at the extremes: the CI subset of the stability matrix (ureterfsi.stability).
 
 Short runs of the stent-free r-z model (the whole 50 mm segment, coarse mesh, ~12k unknowns): the baseline,
 the largest time step of the matrix, and an absurd load (40 x the paper's) that inverts the ALE mesh within

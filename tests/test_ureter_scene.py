@@ -1,4 +1,4 @@
-"""The ureter scene runs fully coupled (issue 3, verification 7).
+"""The ureter scene runs fully coupled (verification 7).
 
 CI variant: model 3 on a 10 mm segment (tests/data/mini-ureter.yaml; same cross-section, materials,
 load, mesh sizes and quarter symmetry as the study) for 4 steps of 20 ms. The slow variant runs the
@@ -95,7 +95,7 @@ def test_stent_probes_and_diagnostics(mini):
 
 
 def test_one_way_rung_follows_the_fully_coupled_model(mini, mini_one_way):
-    """Issue 5, one-way rung (r-z wall -> urine alone -> quasi-static stent) against the fully coupled
+    """One-way rung (r-z wall -> urine alone -> quasi-static stent) against the fully coupled
     model on the same mesh, load and steps. Measured: <= 1.1e-2 (hole velocity), 4e-3..9e-3 (flux, wall),
     3e-4..8e-4 (stent stress)."""
     _, ref = mini
@@ -205,7 +205,7 @@ def test_study_model3_coarse_quarter_first_steps(tmp_path, repo_root):
 
 
 def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_path, repo_root):
-    """Issue 13: the wall probes read the outer surface R_o(z) on both rungs. The unstented r-z model with the
+    """The wall probes read the outer surface R_o(z) on both rungs. The unstented r-z model with the
     thin-gap stricture (f = 0.7, 4 mm at 5 mm), fully coupled, 4 steps of 20 ms: its wall line is finite at every z
     and equals the one-way rung's (the r-z wall alone, ureterfsi.study.oneway.RecordedWall, what that rung's probes
     read), and so does max_wall_displacement, whose maximum lies under the stricture. The fully coupled rung read the

@@ -1,4 +1,4 @@
-"""The workflow's code standard (issue 16): `snakemake --lint` finds only the conda/container class (dolfinx
+"""The workflow's code standard: `snakemake --lint` finds only the conda/container class (dolfinx
 comes from Debian's packages, README), and snakefmt would change no Snakefile or rule file."""
 from __future__ import annotations
 

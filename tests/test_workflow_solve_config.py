@@ -63,7 +63,7 @@ def test_run_config_file_of_another_version_or_corrupt_is_named(tmp_path):
     ("time", "probe_times", [0.5, 9.0], "time.probe_times[1]: must lie in (0, time.end = 3] s, got 9"),
 ])
 def test_hand_edited_run_config_file_is_validated(tmp_path, section, key, value, message):
-    """Issue 14: the run configuration file is validated like a configuration file (the schema of its sections
+    """The run configuration file is validated like a configuration file (the schema of its sections
     and the checks that read only them), not trusted: time.dt = -1 in it used to start a solve that stepped
     backwards without end."""
     from ureterfsi.config import read_run_config

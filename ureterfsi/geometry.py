@@ -2,8 +2,8 @@
 
 All lengths in metres. The ureter axis is z, inlet (kidney) at z = 0, outlet (bladder) at z = L.
 Side holes are radial, in diametrically opposite pairs, all on the y axis (`hole_arrangement: aligned`) or
-alternating between the y and the x axis from pair to pair (`rotated_90`, issue 13). The stent axis lies on the
-ureter's or displaced along x by `stent_offset` (issue 13). An optional axisymmetric stricture (issue 13) narrows the
+alternating between the y and the x axis from pair to pair (`rotated_90`). The stent axis lies on the
+ureter's or displaced along x by `stent_offset`. An optional axisymmetric stricture narrows the
 lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`).
 """
 from __future__ import annotations

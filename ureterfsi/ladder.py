@@ -1,4 +1,4 @@
-"""Fidelity ladder: what each cheaper model costs and what it loses against the reference (issue 5).
+"""Fidelity ladder: what each cheaper model costs and what it loses against the reference.
 
 Each rung is a run of the same stent model (config `ladder`): a fidelity (fully coupled / one-way), a
 mesh symmetry, a mesh level and a time step. For every quantity behind a figure the error of a rung is

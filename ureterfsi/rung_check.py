@@ -1,4 +1,4 @@
-"""Trust at every design point (issue 13): a design study's rung checked against the fully coupled model at the
+"""Trust at every design point: a design study's rung checked against the fully coupled model at the
 corners of its design space, on the 10 mm segment.
 
 A study on a rung cheaper than ``fully_coupled`` (``one_way``: the scenes' rung) is checked at the corners of its

@@ -76,7 +76,7 @@ def check_hole_end_clearance(cfg):
                           f"this span must exceed the hole diameter {fmt(g['hole_diameter'])} m, got c = {fmt(c)}")
 
 
-# ---- stricture (issue 13, ureterfsi.geometry.Stricture)
+# ---- stricture (ureterfsi.geometry.Stricture)
 
 def check_stricture(cfg):
     """A stricture (fraction > 0) lies inside the segment and keeps the narrowest gap (stent to wall, or the lumen
@@ -101,7 +101,7 @@ def check_stricture(cfg):
 
 
 def check_stent_offset(cfg):
-    """An offset stent (geometry.stent_offset, issue 13) keeps the narrowest stent-wall gap, R_i(1 - f) - r_o - |x_s|,
+    """An offset stent (geometry.stent_offset) keeps the narrowest stent-wall gap, R_i(1 - f) - r_o - |x_s|,
     >= geometry.stent_offset_min_gap of the coaxial annulus R_i - r_o."""
     g, geo = cfg["geometry"], _geom(cfg)
     if not geo.stent_offset:

@@ -1,4 +1,4 @@
-"""Stability at the extremes (issue 5): a one-at-a-time parameter matrix around the baseline (docs/stability.md).
+"""Stability at the extremes: a one-at-a-time parameter matrix around the baseline (docs/stability.md).
 
 Each case changes one quantity of the configuration's baseline (config `stability.axes`), runs to
 `stability.end` and ends "stable" or "failed" at the first limit it hits, with a diagnosis naming the limit,

@@ -102,7 +102,7 @@ def combine(items, cfg: dict | None = None) -> xr.Dataset:
     out["halving_time"] = (("case", "halving"), arr)
     ds = xr.Dataset(out, coords={"case": np.asarray(names, dtype=object), "step": np.arange(nstep)})
     annotate(ds)
-    ds.attrs.update(provenance_attrs(cfg or {}, title="ureterfsi stability matrix (issue 5)",
+    ds.attrs.update(provenance_attrs(cfg or {}, title="ureterfsi stability matrix",
                                      cases=",".join(names),
                                      scenes="; ".join(f"{k}: {v}" for k, v in SCENES.items()),
                                      energy_safety=runs[0].attrs.get("energy_safety", ""),

@@ -1,4 +1,4 @@
-"""One-way coupled rung of the fidelity ladder: wall -> urine -> stent (issue 5).
+"""One-way coupled rung of the fidelity ladder: wall -> urine -> stent.
 
 The fully coupled rung (ureterfsi.study.coupled) solves wall, urine and stent in one Newton system. This rung
 solves them in sequence, each with the engine's own physics blocks:

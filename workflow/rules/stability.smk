@@ -1,4 +1,4 @@
-# Stability at the extremes (issue 5, ureterfsi.stability): one-at-a-time variations of the configuration's
+# Stability at the extremes (ureterfsi.stability): one-at-a-time variations of the configuration's
 # baseline (config `stability`) on the stent-free r-z model (~1.2k triangles, seconds to minutes per case) and
 # the side-hole resolution on a 3D stented model, one-way (minutes per case, the case builds its own mesh); one
 # job per case, then the matrix dataset and the stability map. Target: `snakemake --cores 2 stability` (not
