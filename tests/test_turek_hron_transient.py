@@ -59,7 +59,7 @@ STORED = {"FSI3 refinement 2": ("turek_hron_fsi3_r2_dt2e-3_chi1.json", 1.5, 1),
 
 @pytest.mark.parametrize("run", sorted(STORED))
 def test_the_stored_periodic_runs_meet_the_featflow_row(run):
-    """The issue's target against the finer published row (Featflow level 4): means and amplitudes within 5 %,
+    """The target against the finer published row (Featflow level 4): means and amplitudes within 5 %,
     frequencies within 2 %, over the runs' last swings (FSI2: two, to t = 7 s; FSI3: one, to t = 2.5 s)."""
     name, t_from, periods = STORED[run]
     case, series = _stored(name)

@@ -57,7 +57,7 @@ from .metadata import DESIGN_PARAMETERS, cf_meta
 from . import rung_check as rc
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
-FRENCH_RANGE = (4.8, 8.0)              # Fr, the ureteral stent sizes of the issue (clinical range)
+FRENCH_RANGE = (4.8, 8.0)              # Fr, the clinical range of ureteral stent sizes
 ID_DIGITS = 10
 VALUE_DIGITS = 10                      # significant digits a parameter value keeps (ids and configs agree)
 RESERVED_NAMES = ("meshes", "wall_motion")   # directories of results/designs/
