@@ -208,10 +208,8 @@ class FlowBlockLU(LinearSolver):
     """Direct solve of a fluid-alone Newton system. Its Jacobian is block diagonal: the flow (velocity,
     pressure) block and the identity rows of the mirrored mesh displacement, whose columns the flow rows do
     not touch. LU of the flow block alone (PCFieldSplit, additive): even with the matrix's own sparsity
-    (sparsity.flow_matrix), MUMPS's analysis of the whole matrix (METIS on the isolated mirror dofs) is slow;
-    measured on the coarse model 3 (benchmarks/fluid_linear_solver.py): first solve 38.9 s (whole) vs
-    3.7 s (flow block), kept solve 0.17 vs 0.13 s, LU memory 1 294 vs 1 149 MB. (Before the own sparsity,
-    the whole-matrix LU took 20-37 s and 4.2 GB.)"""
+    (sparsity.flow_matrix), MUMPS's analysis of the whole matrix (METIS on the isolated mirror dofs) is slow
+    (docs/performance.md, benchmarks/fluid_linear_solver.py)."""
 
     def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, counters: dict,
                  mumps: Mumps = Mumps()):

@@ -64,7 +64,7 @@ class Extension:
     """The linear extension problem a(d, psi) = 0 with the boundary displacement as Dirichlet data (the
     stiffened vector Laplacian or elasticity of SolverOptions.mesh_motion), assembled once. `iterative`
     False: LU by `package`, factorised once (`lu`); True: conjugate gradients with ICC(0) (`cg_icc`; the
-    operator is SPD; cheaper here than smoothed-aggregation AMG: 0.7 vs 1.5 s per solve on the coarse model 3)
+    operator is SPD; cheaper than smoothed-aggregation AMG, docs/performance.md)
     to `rtol` of the preconditioned right-hand side, started from the caller's guess; its iterations are
     counted in counters["mesh_motion_iterations"]."""
     mismatch = 0.0
