@@ -2,7 +2,7 @@
 no more than 3x the one-way cost): both solves of one model and mesh level start together, each as its own process
 (`python -m ureterfsi.study`, the solve rule's command), and the table gives each one's CPU time (user + system,
 from the kernel's accounting of the child), wall time and peak RSS, their ratios, and the one-way rung's errors
-against the fully coupled run (ureterfsi.ladder.relative_error, relative max norm per figure quantity). Each solve
+against the fully coupled run (ureterfsi.analyses.ladder.relative_error, relative max norm per figure quantity). Each solve
 runs with the thread count the solve rule gets (`threads: 1`: Snakemake sets OMP_NUM_THREADS, OPENBLAS_NUM_THREADS,
 ... to the rule's threads), so MUMPS's OpenMP and BLAS threads do not spin on the other solve's core.
 
@@ -75,7 +75,7 @@ def table(out: Path) -> str:
     import netCDF4  # noqa: F401  (the netCDF4 engine before xarray)
     import xarray as xr
 
-    from ureterfsi.ladder import QUANTITIES, relative_error
+    from ureterfsi.analyses.ladder import QUANTITIES, relative_error
 
     result = json.loads((out / "benchmark.json").read_text())
     cost = result["cost"]

@@ -1,4 +1,4 @@
-"""Cost of the field figures' sampling (ureterfsi.plotting_fields) on the default configuration's field model:
+"""Cost of the field figures' sampling (ureterfsi.plotting.fields) on the default configuration's field model:
 the model-3 coarse quarter mesh of config/config.yaml, its urine cells, synthetic nodal values (the cost does
 not depend on the values), the four instants of Figs. 6-9. Numbers: docs/fields.md.
 
@@ -14,15 +14,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-import netCDF4  # noqa: F401,E402  (before dolfinx: see ureterfsi/__init__.py)
 import numpy as np  # noqa: E402
 
-from ureterfsi import tags  # noqa: E402
+from ureterfsi.mesh import tags  # noqa: E402
 from ureterfsi.config import load_config  # noqa: E402
-from ureterfsi.geometry import UreterGeometry  # noqa: E402
-from ureterfsi.mesh import build_mesh  # noqa: E402
-from ureterfsi.meshfile import read_msh  # noqa: E402
-from ureterfsi.plotting_fields import FieldSet, hole_flow_section, pressure_lines  # noqa: E402
+from ureterfsi.mesh.geometry import UreterGeometry  # noqa: E402
+from ureterfsi.mesh.build import build_mesh  # noqa: E402
+from ureterfsi.mesh.io import read_msh  # noqa: E402
+from ureterfsi.data.fieldfiles import FieldSet, hole_flow_section, pressure_lines  # noqa: E402
 
 
 def urine_tets(msh: Path) -> tuple[np.ndarray, np.ndarray]:

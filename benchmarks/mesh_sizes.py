@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 
 from ureterfsi.config import DEFAULT_CONFIG, load_config_files
-from ureterfsi.mesh import build_mesh
+from ureterfsi.mesh.build import build_mesh
 
 
 def main() -> None:

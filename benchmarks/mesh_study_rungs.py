@@ -4,7 +4,7 @@ rung hold at the medium and fine meshes, not only at the coarse one where the la
 Reads the mesh study's runs of both rungs, as the workflow makes them (`results/runs/{fidelity}/{symmetry}/
 model{model}_{level}.nc`, Fig. 3's model and span), from one results directory or two (the two rungs are made
 under different configuration files, so usually in two checkouts), and prints per level the size and cost of each
-run and the one-way rung's error per figure quantity (ureterfsi.ladder.relative_error: relative max norm over the
+run and the one-way rung's error per figure quantity (ureterfsi.analyses.ladder.relative_error: relative max norm over the
 common time span and probe times), then the error of each coarser level of a rung against its finest level.
 
     python benchmarks/mesh_study_rungs.py --fully-coupled /work/main/results --one-way /work/ow/results
@@ -17,8 +17,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from ureterfsi.checked_io import RUN_FILE, open_netcdf  # noqa: E402
-from ureterfsi.ladder import QUANTITIES, relative_error  # noqa: E402
+from ureterfsi.data.checked import RUN_FILE, open_netcdf  # noqa: E402
+from ureterfsi.analyses.ladder import QUANTITIES, relative_error  # noqa: E402
 
 RUNGS = ("fully_coupled", "one_way")
 

@@ -5,7 +5,7 @@ previous state ("constant") vs the linear and the quadratic extrapolation of the
 Runs the rung of one model on one study mesh over [0, end] once per value (separate processes, so that wall
 times and peak memories do not mix), then reports per run the wall time, the Newton work (iterations,
 factorisations, solves with a kept factorisation, time per phase) and the relative max-norm difference of every
-figure quantity against the first value's run (ureterfsi.ladder.relative_error). Predictors stop at the same
+figure quantity against the first value's run (ureterfsi.analyses.ladder.relative_error). Predictors stop at the same
 Newton tolerance, so their difference must stay at the tolerance's level while the work drops; for a tolerance
 the tightest value goes first, and the differences are the errors of the others.
 
@@ -27,7 +27,7 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import load_config_files
-from ureterfsi.ladder import QUANTITIES, relative_error
+from ureterfsi.analyses.ladder import QUANTITIES, relative_error
 
 ROOT = Path(__file__).resolve().parent.parent
 

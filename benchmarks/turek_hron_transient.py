@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from mpi4py import MPI  # noqa: E402
 
-from ureterfsi.provenance import atomic_path  # noqa: E402
+from ureterfsi.data.provenance import atomic_path  # noqa: E402
 from ureterfsi.scenes import turek_hron_transient as th  # noqa: E402
 
 SCALE = {"ux_A": (1e3, "mm"), "uy_A": (1e3, "mm"), "drag": (1.0, "N/m"), "lift": (1.0, "N/m")}

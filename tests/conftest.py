@@ -3,15 +3,12 @@ from __future__ import annotations
 
 import copy
 import gc
-from pathlib import Path
-
-import netCDF4  # noqa: F401  (before any dolfinx import: see ureterfsi/__init__.py)
+from pathlib import Path  # noqa: F401
 
 import pytest
 
+from ureterfsi import REPO_ROOT   # importing ureterfsi loads netCDF4 before any test imports dolfinx
 from ureterfsi.config import load_config
-
-REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(autouse=True, scope="module")

@@ -14,7 +14,7 @@ import math
 
 import pytest
 
-from ureterfsi import calibration as C
+from ureterfsi.study import calibration as C
 from ureterfsi.scenes.wall_rz import WallModel, wall_material, wall_radii
 
 MM = 1e-3
@@ -23,7 +23,7 @@ MM = 1e-3
 @pytest.fixture(scope="module")
 def default_cfg():
     from ureterfsi.config import load_config
-    from ureterfsi.provenance import REPO_ROOT
+    from ureterfsi import REPO_ROOT
 
     return load_config(REPO_ROOT / "config" / "config.yaml")
 

@@ -2,18 +2,18 @@
 post-processing modules importable without dolfinx."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401,I001  (before anything that loads dolfinx)
 import json
 import subprocess
 import sys
 from pathlib import Path
 
+import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
 
-from ureterfsi import metadata
-from ureterfsi.gci import gci_dataset
+from ureterfsi.data import cf as metadata
+from ureterfsi.analyses.gci import gci_dataset
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_gci import convergence_dataset  # noqa: E402
@@ -79,7 +79,8 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
     """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3 (or of a Saltelli
     design of N = 2 over two parameters: 12 rows, 8 points, with its Sobol' indices)."""
     from test_aggregate_figures import synthetic_run
-    from ureterfsi import design_results, designs
+    from ureterfsi.designs import results as design_results
+    from ureterfsi.designs import space as designs
     from ureterfsi.config import load_config
 
     grid = {"model": "3", "level": "coarse",
@@ -94,7 +95,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
     for p in st.points:
         paths[p.id] = tmp_path / f"{p.id}.nc"
         metadata.write_netcdf(synthetic_run(cfg, "3", end=cfg["time"]["end"]), paths[p.id])
-    corners = {}                                   # the rung check's corners (ureterfsi.rung_check)
+    corners = {}                                   # the rung check's corners (ureterfsi.designs.rung_check)
     for c in st.check.corners:
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         for k, f in enumerate(corners[c.id]):
@@ -115,7 +116,8 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
     cfg = load_config(repo_root / "config/config.yaml")
     if kind in ("run", "models", "ladder"):
         from test_aggregate_figures import synthetic_run
-        from ureterfsi import aggregate, ladder
+        from ureterfsi.analyses import aggregate
+        from ureterfsi.analyses import ladder
 
         runs = {m: synthetic_run(cfg, m, end=1.0, wall_time=10.0) for m in ("1", "3")}
         paths = {}
@@ -169,7 +171,7 @@ def test_time_coordinate_is_cf_and_read_in_seconds(tmp_path):
     """`time` is written as a CF time coordinate (units '<unit> since <epoch>', calendar) and read back by the
     package's reader as seconds from the run's start, not as dates."""
     from test_aggregate_figures import synthetic_run
-    from ureterfsi.checked_io import RUN_FILE, open_netcdf
+    from ureterfsi.data.checked import RUN_FILE, open_netcdf
     from ureterfsi.config import load_config
 
     cfg = load_config(Path(__file__).resolve().parent.parent / "config/config.yaml")
@@ -185,7 +187,7 @@ def test_time_coordinate_is_cf_and_read_in_seconds(tmp_path):
 
 def test_postprocessing_imports_without_dolfinx():
     code = ("import sys\nfor m in ('dolfinx', 'petsc4py', 'mpi4py', 'ufl'):\n    sys.modules[m] = None\n"
-            "import ureterfsi.metadata, ureterfsi.aggregate, ureterfsi.plotting, ureterfsi.gci\nprint('ok')")
+            "import ureterfsi.data.cf, ureterfsi.analyses.aggregate, ureterfsi.plotting.paper, ureterfsi.analyses.gci\nprint('ok')")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
 
@@ -194,7 +196,7 @@ def test_every_registry_table_gives_udunits_units_and_a_long_name():
     """Every entry of the registry's tables (the templated ones too) has units UDUNITS parses and a long_name."""
     import cf_units
 
-    from ureterfsi import designs
+    from ureterfsi.designs import space as designs
 
     tables = {"VARIABLES": metadata.VARIABLES, "FIELD_VARIABLES": metadata.FIELD_VARIABLES,
               "WALL_MOTION_VARIABLES": metadata.WALL_MOTION_VARIABLES,

@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from ureterfsi.config import ConfigError, load_config, main, validate_config
-from ureterfsi.provenance import config_hash
+from ureterfsi.data.provenance import config_hash
 
 DELETE = object()
 

@@ -3,7 +3,6 @@ validates, expands to SALib's Saltelli design of N (2 D + 2) rows within its bou
 computed under, and its dry run lists one solve per point and nothing else. No solves."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import hashlib
 from pathlib import Path
 
@@ -11,7 +10,7 @@ import numpy as np
 
 from ureterfsi.config.reading import deep_merge, read_yaml
 from ureterfsi.config.validation import load_config_files
-from ureterfsi.designs import saltelli_unit_sample, studies
+from ureterfsi.designs.space import saltelli_unit_sample, studies
 
 REPO = Path(__file__).resolve().parent.parent
 FILES = [REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml", REPO / "config/designs/obstruction_sobol.yaml"]

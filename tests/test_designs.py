@@ -1,8 +1,7 @@
-"""Design studies (ureterfsi.designs, workflow/rules/designs.smk): expansion, ids, refusals, the job plan of
+"""Design studies (ureterfsi.designs.space, workflow/rules/designs.smk): expansion, ids, refusals, the job plan of
 a 100-point study, what a change re-runs, and a 2 x 2 grid end to end on the 10 mm segment."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import copy
 import os
 from pathlib import Path
@@ -13,8 +12,8 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import ConfigError, load_config
-from ureterfsi.designs import point_id, studies
-from ureterfsi.meshfile import read_msh
+from ureterfsi.designs.space import point_id, studies
+from ureterfsi.mesh.io import read_msh
 from test_workflow_e2e import e2e_config, job_counts, ok, snakemake
 
 REPO = Path(__file__).resolve().parent.parent
@@ -110,7 +109,7 @@ def test_dry_run_of_a_100_point_study(tmp_path):
                                          wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
     counts = _dry(tmp_path, cfg, "design_big")
     # the rung check (default on for the one-way rung): 4 corners on the 10 mm segment (2 hole diameters: 2 meshes;
-    # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.rung_check)
+    # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.designs.rung_check)
     assert counts == {"design_solve": 100, "design_mesh": 10 + 2, "design_wall_motion": 10 + 2, "design_dataset": 1,
                       "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
     cfg["design_studies"]["big"]["rung_check"] = {"corners": "none"}
@@ -122,7 +121,7 @@ def test_dry_run_of_a_100_point_study(tmp_path):
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
     """Every output of study `name` (points and, with a rung check, corners) as an empty file, in job order (then
     `snakemake --touch` records them as made by their jobs)."""
-    from ureterfsi.designs import corner_run_paths, design_figure_kinds
+    from ureterfsi.designs.space import corner_run_paths, design_figure_kinds
 
     st = studies(load_config(copy.deepcopy(cfg)))[name]
     every = st.points + (st.check.corners if st.check else [])
@@ -206,8 +205,8 @@ def test_two_by_two_grid_end_to_end(tmp_path):
     for ext in cfg["figures"]["formats"]:
         assert (tmp_path / f"results/figures/designs/mini_parameters.{ext}").stat().st_size > 0
         assert (tmp_path / f"results/figures/designs/mini_map.{ext}").stat().st_size > 0
-    from ureterfsi.design_results import QUANTITIES
-    from ureterfsi.plotting_designs import map_figure
+    from ureterfsi.designs.results import QUANTITIES
+    from ureterfsi.plotting.designs import map_figure
 
     drawn = [q for q in QUANTITIES if np.isfinite(ds[q].values).any()]
     maps = map_figure(ds).axes[:len(drawn)]     # one map per quantity over hole diameter (x) and peak traction (y)
@@ -275,7 +274,7 @@ def test_stricture_changes_wall_and_mesh():
 
 def _lumen_wall_nodes(msh: Path) -> np.ndarray:
     """(r, z) of the mesh nodes on the fluid-ureter interface."""
-    from ureterfsi import tags
+    from ureterfsi.mesh import tags
 
     x = read_msh(msh).nodes(2, tags.FLUID_URETER)
     return np.c_[np.hypot(x[:, 0], x[:, 1]), x[:, 2]]
@@ -284,7 +283,7 @@ def _lumen_wall_nodes(msh: Path) -> np.ndarray:
 def test_strictured_design_point_end_to_end(tmp_path):
     """One strictured design point on the 10 mm segment: its mesh narrows the lumen as asked, its run conserves
     the flow split at the outlet and records the share inside the stent."""
-    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.mesh.geometry import UreterGeometry
 
     cfg = e2e_config(tmp_path / "base.yaml")
     cfg["design_studies"] = {"narrow": {"model": "2", "level": "coarse", "rung": "one_way", "grid": {"parameters": {
@@ -335,9 +334,9 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
     then posed on the extension, which its prediction (0.89) accepts."""
     import shutil
 
-    from ureterfsi.mesh import load_mesh
+    from ureterfsi.mesh.build import load_mesh
     from ureterfsi.study.oneway import WALL_MOTION, WallHistory, fluid_problem
-    from ureterfsi.checked_io import open_netcdf
+    from ureterfsi.data.checked import open_netcdf
     from mpi4py import MPI
 
     cfg = e2e_config(tmp_path / "base.yaml")
@@ -470,7 +469,7 @@ def test_map_min_jacobian_locates_its_minimum():
 
 def test_radial_blend_follows_the_strictured_wall():
     """The one-way ALE map moves a node on the narrowed wall R_i(z) with the wall and leaves the stent still."""
-    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.mesh.geometry import UreterGeometry
     from ureterfsi.study.oneway import WallHistory, radial_blend
 
     cfg = load_config(BASE, {"geometry": {"stricture_fraction": 0.6}})
@@ -543,7 +542,7 @@ def _one_point(tmp_path, name: str, params: dict):
 
 def _lumen_balance(run, ds):
     """Stent-lumen mass balance: inflow - outflow - sum_k w_k Q_k (w_k the holes each recorded one stands for)."""
-    from ureterfsi.design_results import hole_mirror_weights
+    from ureterfsi.designs.results import hole_mirror_weights
 
     q, lumen, inflow = run["outlet_flux"].values, run["outlet_lumen_flux"].values, run["inlet_lumen_flux"].values
     flux = run["hole_flux"].transpose("time", "hole").values
@@ -561,7 +560,7 @@ def _lumen_balance(run, ds):
 def test_rotated_pairs_design_point_end_to_end(tmp_path):
     """Rotated pairs on the quarter model: every hole found on its own axis (y, x, y), the outlet-most hole's
     velocity probe on its axis, the stent lumen's mass balance closing."""
-    from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
+    from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
 
     point, run, ds = _one_point(tmp_path, "rotated", {"hole_pair_rotation": [90]})
     assert point.symmetry == run.attrs["symmetry"] == "quarter"
@@ -594,13 +593,13 @@ def test_offset_stent_design_point_end_to_end(tmp_path):
 
 def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     """The y = 0 mirror plane holds for an offset stent: the half model (y >= 0) of an offset stent with rotated pairs
-    gives the full model's flows on its mirror image (ureterfsi.mesh.mirror_mesh, node for node) to round-off, hole
+    gives the full model's flows on its mirror image (ureterfsi.mesh.build.mirror_mesh, node for node) to round-off, hole
     by hole (the +y holes whole, the x holes cut in half by the plane) and in the mirror-weighted hole total."""
     import netCDF4  # noqa: F401
     from ureterfsi.study import oneway
     from ureterfsi.config import load_config_files
-    from ureterfsi.design_results import hole_mirror_weights
-    from ureterfsi.mesh import build_mesh, mirror_mesh
+    from ureterfsi.designs.results import hole_mirror_weights
+    from ureterfsi.mesh.build import build_mesh, mirror_mesh
     from ureterfsi.study.options import RunSpec
 
     cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml"]),

@@ -1,9 +1,8 @@
-"""Design studies, "trust at every point" (ureterfsi.rung_check): the corners of a study's design space,
+"""Design studies, "trust at every point" (ureterfsi.designs.rung_check): the corners of a study's design space,
 the region they check, the corners' configurations on the 10 mm segment, the dataset's rung errors from synthetic
 run files, and the corner jobs of a dry run. The end to end run is tests/test_designs.py's 2 x 2 grid."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import copy
 import json
 from pathlib import Path
@@ -13,14 +12,14 @@ import pytest
 import xarray as xr
 import yaml
 
-from ureterfsi import rung_check as rc
+from ureterfsi.designs.space import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
-from ureterfsi.designs import corner_run_paths, point_id, studies
-from ureterfsi.design_results import QUANTITIES, rung_check_dataset, study_dataset
-from ureterfsi import metadata
-from ureterfsi.metadata import rung_check_metadata
-from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
+from ureterfsi.designs.space import corner_run_paths, point_id, studies
+from ureterfsi.designs.results import QUANTITIES, rung_check_dataset, study_dataset
+from ureterfsi.data import cf as metadata
+from ureterfsi.data.cf import rung_check_metadata
+from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -78,7 +77,7 @@ def test_relative_errors():
 
 def test_outlet_flow_errors_are_relative_to_the_flow():
     """The peak and mean outlet flow's errors over the run's largest |Q_out|, the backflow's over integral |Q_out| dt."""
-    from ureterfsi.design_results import error_scales
+    from ureterfsi.designs.results import error_scales
 
     t = np.linspace(0.0, 0.04, 5)
     run = xr.Dataset({"outlet_flux": ("time", np.array([0.0, -2.0, -4.0, 1.0, 2.0]))}, coords={"time": t})
@@ -110,7 +109,7 @@ def test_corners_of_a_50_mm_study_on_the_segment():
     paths = corner_run_paths(st)
     assert paths[ch.corners[0].id] == (f"results/designs/s/rung_check/{ch.corners[0].id}/one_way.nc",
                                        f"results/designs/s/rung_check/{ch.corners[0].id}/fully_coupled.nc")
-    from ureterfsi.designs import corner_solve_request
+    from ureterfsi.designs.space import corner_solve_request
 
     c, ref = corner_solve_request(st, ch.corners[0].id, "fully_coupled")
     assert ref["solver"]["fully_coupled_scheme"] == "partitioned" and c.config["solver"]["fully_coupled_scheme"] == \
@@ -234,7 +233,7 @@ def test_dataset_records_the_rung_error_per_corner(tmp_path):
               "in_rung_check_region", "corner_within_tolerance"):
         assert (ds[k].attrs["units"], ds[k].attrs["long_name"]) == meta[k], k
     assert ds["corner_hole_diameter"].attrs["units"] == "m" and ds["rung_error"].attrs["units"] == "1"
-    from ureterfsi.metadata import write_netcdf
+    from ureterfsi.data.cf import write_netcdf
 
     write_netcdf(ds, tmp_path / "s.nc")                      # CF-safe: what rule design_dataset writes
     back = xr.load_dataset(tmp_path / "s.nc", decode_times=False)
@@ -339,7 +338,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
     """A fully coupled corner solve that fails (the thin-gap corner f = 0.7 inverts the harmonic mesh motion at 40
     ms) is recorded by its job as a run file holding the failure: the check names it, no error is claimed there, and
     no point is trusted."""
-    from ureterfsi.design_results import write_failed_corner
+    from ureterfsi.designs.results import write_failed_corner
 
     cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
     st = studies(cfg)["s"]
@@ -367,7 +366,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
 
 def test_a_corrupt_corner_run_file_is_named_in_one_line(tmp_path):
     """The rung check reads its corners' run files through checked_io: a truncated one is a BadFile naming it."""
-    from ureterfsi.checked_io import BadFile
+    from ureterfsi.data.checked import BadFile
 
     cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
     st = studies(cfg)["s"]

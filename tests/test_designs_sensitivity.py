@@ -3,7 +3,6 @@ expansion, the refusals, the indices through the design dataset, the Ishigami fu
 figures drawn from datasets of known values."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi.aggregate)
 import copy
 from pathlib import Path
 
@@ -13,11 +12,11 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import ConfigError, load_config
-from ureterfsi.designs import saltelli_unit_sample, studies
-from ureterfsi.design_results import SOBOL_INDICES, add_sobol_indices, sobol_indices, study_dataset
-from ureterfsi import metadata
-from ureterfsi.metadata import VARIABLES
-from ureterfsi.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
+from ureterfsi.designs.space import saltelli_unit_sample, studies
+from ureterfsi.designs.results import SOBOL_INDICES, add_sobol_indices, sobol_indices, study_dataset
+from ureterfsi.data import cf as metadata
+from ureterfsi.data.cf import VARIABLES
+from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -141,8 +140,8 @@ def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):
     assert np.isnan(ds["sobol_total"].sel(quantity="peak_stent_von_mises").values).all()   # no stent stress recorded
     for k in ("saltelli_point", "quantity", "parameter", *SOBOL_INDICES):
         assert (ds[k].attrs["units"], ds[k].attrs["long_name"]) == VARIABLES[k], k
-    from ureterfsi.metadata import write_netcdf
-    from ureterfsi.plotting_designs import sensitivity_figure
+    from ureterfsi.data.cf import write_netcdf
+    from ureterfsi.plotting.designs import sensitivity_figure
 
     write_netcdf(ds, tmp_path / "s.nc")                  # what rule design_sensitivity reads
     back = xr.load_dataset(tmp_path / "s.nc", decode_times=False)
@@ -153,7 +152,7 @@ def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):
 
 
 def test_sobol_figure_draws_the_indices_and_their_intervals():
-    from ureterfsi.plotting_designs import sobol_figure
+    from ureterfsi.plotting.designs import sobol_figure
 
     params, qs = ["peak_traction", "hole_diameter"], ["peak_outlet_flux", "backflow_volume"]
     vals = {k: np.array([[0.1, 0.5], [0.3, 0.2]]) + 0.01 * i for i, k in enumerate(SOBOL_INDICES)}
@@ -173,7 +172,7 @@ def test_map_figure_plots_the_grid_values():
     """A 3 x 2 x 2 grid with a fixed fourth parameter: one map per quantity and value of the third parameter; each
     map's cells hold the dataset's values on the grid, the design points are marked, the colour bar carries the
     registry's units."""
-    from ureterfsi.plotting_designs import map_figure
+    from ureterfsi.plotting.designs import map_figure
 
     grid = {"hole_diameter": [5e-4, 7e-4, 9e-4], "stricture_fraction": [0.0, 0.5], "hole_pair_spacing": [0.005, 0.01],
             "stricture_length": [0.004]}

@@ -1,4 +1,4 @@
-"""Field files (ureterfsi.fields): a one-way run of the 10 mm segment (model 3, two 20 ms steps) writes XDMF
+"""Field files (ureterfsi.study.fields): a one-way run of the 10 mm segment (model 3, two 20 ms steps) writes XDMF
 snapshots at its probe times; read back without dolfinx, they match the run's own diagnostics exactly."""
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import netCDF4  # noqa: F401  (before dolfinx: see ureterfsi/__init__.py)
 import numpy as np
 import pytest
 import xarray as xr
@@ -25,7 +24,7 @@ def run(tmp_path_factory):
     cfg["peristalsis"]["ramp_time"] = 0.039
     cfg["figures"].update(wave_times=[0.02, 0.04], hole_velocity_times=[0.02, 0.04, 0.02, 0.04])
     (tmp / "cfg.json").write_text(json.dumps(cfg, default=float))
-    from ureterfsi.mesh import build_mesh
+    from ureterfsi.mesh.build import build_mesh
 
     build_mesh(cfg, "3", "coarse", "quarter", tmp / "m3.msh", tmp / "m3.json")
     out = tmp / "runs" / "one_way" / "quarter" / "model3_coarse.nc"
@@ -51,7 +50,7 @@ def test_field_files_referenced_from_dataset(run):
 def test_wall_pressure_matches_run_diagnostic(run):
     """max over snapshots and wall vertices of |p - p_ref| = the run's one_way_max_wall_pressure_deviation
     (both: P1 pressure dofs on the fluid-ureter interface, every step of this run is a snapshot)."""
-    from ureterfsi.plotting_fields import read_fields
+    from ureterfsi.data.fieldfiles import read_fields
 
     ds, out, cfg = run
     fs = read_fields(out.parent / ds.attrs["fields_path"], "urine")
@@ -65,7 +64,7 @@ def test_wall_pressure_matches_run_diagnostic(run):
 
 def test_stent_von_mises_cell_means_bounded_by_run_maximum(run):
     """DG0 cell means of the stent stress never exceed the run's maximum of the DG1 field, and reach most of it."""
-    from ureterfsi.plotting_fields import read_fields
+    from ureterfsi.data.fieldfiles import read_fields
 
     ds, out, _ = run
     fs = read_fields(out.parent / ds.attrs["fields_path"], "stent")
@@ -79,8 +78,8 @@ def test_hole_velocity_of_the_figure_matches_run_probe(run):
     across the outlet-most hole (x = 0, r = probe radius) against the run's hole_velocity_y (the P2 field at
     the probe points): the field file holds the P1 vertex values, so they agree to the P1 interpolation error
     of the hole's few elements, < 10 % of the peak (a wrong time, component, sign or hole is off by ~100 %)."""
-    from ureterfsi.geometry import UreterGeometry
-    from ureterfsi.plotting_fields import hole_flow_section, urine_fields
+    from ureterfsi.mesh.geometry import UreterGeometry
+    from ureterfsi.data.fieldfiles import hole_flow_section, urine_fields
 
     ds, out, cfg = run
     g = UreterGeometry.from_config(cfg)
@@ -102,10 +101,10 @@ def test_field_figures_from_the_field_file(run, tmp_path):
     """Both field figures are drawn from the run's field file: the section is NaN in the stent wall and
     finite in the hole channel and the lumen; the wall pressure line stays within the run's maximum wall
     pressure deviation (a line through the P1 values of the wall vertices) and reaches most of it."""
-    from ureterfsi.geometry import UreterGeometry
-    from ureterfsi.plotting import save_figure
-    from ureterfsi.plotting_fields import (fig_hole_flow, fig_pressure_along, hole_flow_section, pressure_lines,
-                                           urine_fields)
+    from ureterfsi.mesh.geometry import UreterGeometry
+    from ureterfsi.data.fieldfiles import hole_flow_section, pressure_lines, urine_fields
+    from ureterfsi.plotting.fields import fig_hole_flow, fig_pressure_along
+    from ureterfsi.plotting.style import save_figure
 
     ds, out, cfg = run
     g = UreterGeometry.from_config(cfg)

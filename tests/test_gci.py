@@ -1,9 +1,8 @@
-"""Grid Convergence Index (ureterfsi.gci): the worked example of Celik et al. 2008 (Table 1), exact power
+"""Grid Convergence Index (ureterfsi.analyses.gci): the worked example of Celik et al. 2008 (Table 1), exact power
 laws, oscillatory / divergent / identical data, the GCI dataset of a mesh-convergence dataset, and the
 workflow script of rules `gci` and `table_gci`."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401,I001  (before anything that loads dolfinx: see ureterfsi.aggregate)
 import json
 import math
 import runpy
@@ -17,10 +16,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ureterfsi import aggregate, metadata
-from ureterfsi.checked_io import open_netcdf
-from ureterfsi.provenance import FORMAT_VERSION
-from ureterfsi.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size,
+from ureterfsi.analyses import aggregate
+from ureterfsi.data import cf as metadata
+from ureterfsi.data.checked import open_netcdf
+from ureterfsi.data.provenance import FORMAT_VERSION
+from ureterfsi.analyses.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size,
                            three_grid_gci, extrapolated_values, quantity_values,
                            write_gci_table)
 

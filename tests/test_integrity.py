@@ -1,7 +1,6 @@
 """Corrupt or foreign pipeline files fail with one line `<path>: <what is wrong>`."""
 from __future__ import annotations
 
-import netCDF4  # noqa: F401  (before dolfinx)
 import json
 import runpy
 from types import SimpleNamespace
@@ -12,11 +11,11 @@ import xarray as xr
 from mpi4py import MPI
 
 from test_aggregate_figures import synthetic_run
-from ureterfsi import aggregate
-from ureterfsi.checked_io import MESH_SIDECAR, BadFile, read_json
+from ureterfsi.analyses import aggregate
+from ureterfsi.data.checked import MESH_SIDECAR, BadFile, read_json
 from ureterfsi.config import load_config_files
-from ureterfsi.mesh import build_mesh, load_mesh
-from ureterfsi.provenance import FORMAT_VERSION_ATTR
+from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.data.provenance import FORMAT_VERSION_ATTR
 
 
 def _one_line(err, path, what):
@@ -276,9 +275,9 @@ def test_converted_units_are_refused(tmp_path, run_file, cfg):
 
 
 def test_wall_motion_units(tmp_path):
-    from ureterfsi.checked_io import open_netcdf
-    from ureterfsi.metadata import WALL_MOTION_VARIABLES, write_netcdf, attach
-    from ureterfsi.provenance import FORMAT_VERSION
+    from ureterfsi.data.checked import open_netcdf
+    from ureterfsi.data.cf import WALL_MOTION_VARIABLES, write_netcdf, attach
+    from ureterfsi.data.provenance import FORMAT_VERSION
     from ureterfsi.study.oneway import WALL_MOTION
 
     names = [v for v in WALL_MOTION.variables if v not in ("time", "z_inner", "z_outer")]
@@ -300,9 +299,8 @@ def test_wall_motion_units(tmp_path):
 def test_design_files_are_checked(tmp_path, run_file, cfg, repo_root, capsys):
     """The design dataset rule read its runs with a bare xarray call (truncated run: OSError in an empty log)
     and the design-figure rules their dataset so; both now go through checked_io and run_script."""
-    from ureterfsi.designs import studies
-    from ureterfsi.design_results import study_dataset
-
+    from ureterfsi.designs.space import studies
+    from ureterfsi.designs.results import study_dataset
     from ureterfsi.config import load_config
 
     cfg = load_config(json.loads(json.dumps(cfg)), {"design_studies": {"s": {
@@ -328,33 +326,33 @@ def test_design_files_are_checked(tmp_path, run_file, cfg, repo_root, capsys):
 def test_corrupt_field_files_are_named(tmp_path):
     """The field figures read fields.json, the XDMF index and the HDF5 snapshots with bare json/XML/netCDF4
     calls: a truncated file ended in a JSONDecodeError/ParseError/OSError not naming it."""
-    from ureterfsi import plotting_fields
+    from ureterfsi.data import fieldfiles
 
     d = tmp_path / "model2_coarse"
     d.mkdir()
     (d / "fields.json").write_text('{"parts": {"domain": {"file": "domain.xd')
     with pytest.raises(BadFile) as err:
-        plotting_fields.urine_fields(d)
+        fieldfiles.urine_fields(d)
     _one_line(err, d / "fields.json", "not valid JSON")
     (d / "domain.xdmf").write_text('<?xml version="1.0"?>\n<Xdmf Version="3.0"><Domain><Grid Name="x"')
     with pytest.raises(BadFile) as err:
-        plotting_fields.read_fields(d, "domain")
+        fieldfiles.read_fields(d, "domain")
     _one_line(err, d / "domain.xdmf", "not valid XDMF")
     h5 = d / "domain_s000001.h5"
     xr.Dataset({"f": ("n", np.zeros(1000))}).to_netcdf(h5)
     h5.write_bytes(h5.read_bytes()[:2000])
     with pytest.raises(BadFile) as err:
-        plotting_fields._read(d, "domain_s000001.h5:/Function/f/0")
+        fieldfiles._read(d, "domain_s000001.h5:/Function/f/0")
     _one_line(err, h5, "truncated or corrupt field file")
     with pytest.raises(BadFile) as err:
-        plotting_fields._read(d, "domain_s000002.h5:/Function/f/0")
+        fieldfiles._read(d, "domain_s000002.h5:/Function/f/0")
     _one_line(err, d / "domain_s000002.h5", "no such field file")
 
 
 def test_checkpoint_whose_field_snapshots_are_gone_is_not_resumed(tmp_path):
     """A checkpoint resumed after its staged field snapshots were removed ended, after the last step, in a
     FileNotFoundError traceback (fields.FieldWriter.finish indexes every snapshot): now it is not resumed."""
-    from ureterfsi.fields import FieldWriter
+    from ureterfsi.study.fields import FieldWriter
 
     fw = FieldWriter(tmp_path / "model1_coarse", [SimpleNamespace(name="domain")], [0.02], 0, MPI.COMM_WORLD)
     state = {"snapshots": [[1, 0.02]], "write_time": 0.1}
@@ -368,7 +366,7 @@ def test_checkpoint_whose_field_snapshots_are_gone_is_not_resumed(tmp_path):
 def test_a_run_that_would_write_no_field_snapshot_is_refused_before_its_solve(cfg):
     """A run ending before the first probe time with fields.every_steps = 0 solved to its end and then failed in
     FieldWriter.finish: now field_writer refuses it at set-up, naming both keys."""
-    from ureterfsi.fields import field_writer
+    from ureterfsi.study.fields import field_writer
 
     cfg["fields"] |= {"enabled": True, "every_steps": 0}
     cfg["time"]["probe_times"] = [0.5, 1.0]
@@ -382,7 +380,7 @@ def test_a_run_that_would_write_no_field_snapshot_is_refused_before_its_solve(cf
 def test_design_figures_of_a_stent_free_study():
     """A design study of a stent-free model has no holes (dimension hole of size 0): its parameters figure
     failed with 'cannot reshape array of size 0' (xarray cannot stack an empty dimension)."""
-    from ureterfsi.plotting_designs import parameters_figure
+    from ureterfsi.plotting.designs import parameters_figure
 
     ds = xr.Dataset({"peak_outlet_flux": ("peak_traction", [1e-9, 2e-9]),
                      "peak_hole_flux": (("peak_traction", "hole"), np.zeros((2, 0)))},
@@ -435,7 +433,7 @@ def test_atomically_written_files_get_the_umasks_permissions(tmp_path):
     import os
     import stat
 
-    from ureterfsi.provenance import atomic_path, write_json
+    from ureterfsi.data.provenance import atomic_path, write_json
     old = os.umask(0o022)
     try:
         write_json(tmp_path / "a.json", {"x": 1.0})

@@ -10,7 +10,9 @@ import pytest
 import xarray as xr
 
 from test_aggregate_figures import synthetic_run
-from ureterfsi import ladder, plotting, plotting_ladder
+from ureterfsi.analyses import ladder
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.plotting import ladder as plotting_ladder
 from ureterfsi.config import load_config
 
 SCALED = ("outlet_flux", "stent_max_von_mises", "stent_von_mises_line", "wall_radial_displacement",
@@ -105,7 +107,7 @@ def test_ladder_dataset_table_and_figure(cfg, tmp_path):
     assert recorded == cfg["scenes"]["fig04_outlet_flow"]["measured_error"]
     assert "within tolerance, " + ("matches" if ladder.recorded_error_agrees(recorded, 0.02) else "differs") in table
     out = [tmp_path / "pareto.png"]
-    plotting.save_figure(plotting_ladder.ladder_pareto(ds), out)
+    save_figure(plotting_ladder.ladder_pareto(ds), out)
     assert out[0].stat().st_size > 1000
 
 
@@ -128,7 +130,7 @@ def test_overlay_figure_draws_every_rung_of_every_quantity(cfg, tmp_path):
         factor = 1.02 if q in SCALED else 1.0
         np.testing.assert_allclose(lines[1].get_ydata(), factor * expected[q], rtol=1e-12, err_msg=q)
     out = [tmp_path / "overlay.png"]
-    plotting.save_figure(fig, out)
+    save_figure(fig, out)
     assert out[0].stat().st_size > 1000
 
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from ureterfsi import tags
+from ureterfsi.mesh import tags
 from ureterfsi.config import load_config
-from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
-from ureterfsi.mesh import build_mesh, load_mesh
-from ureterfsi.meshfile import read_msh
+from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.mesh.io import read_msh
 
 CASES = [("1", "quarter"), ("2", "quarter"), ("3", "quarter"), ("4", "quarter"), ("4", "half"), ("4", "full"),
          ("1", "axisymmetric")]
@@ -52,11 +52,11 @@ def _cell_tag_array(mesh, ct):
 
 @pytest.mark.parametrize("model,symmetry", [("1", "axisymmetric"), ("3", "quarter")])
 def test_read_msh_agrees_with_gmsh(built, tmp_path, model, symmetry):
-    """ureterfsi.meshfile.read_msh: every physical group's nodes, simplices and name as gmsh's own API gives
+    """ureterfsi.mesh.io.read_msh: every physical group's nodes, simplices and name as gmsh's own API gives
     them, the counts of the mesh's sidecar; a truncated file is refused."""
     import gmsh
 
-    from ureterfsi.checked_io import BadFile
+    from ureterfsi.data.checked import BadFile
 
     msh, info, _ = built(model, symmetry)
     m = read_msh(msh)
@@ -214,7 +214,7 @@ def test_mesh_is_deterministic(cfg, built, tmp_path):
 
 
 def test_sidecar_records_the_request(cfg, built):
-    from ureterfsi.provenance import config_hash
+    from ureterfsi.data.provenance import config_hash
 
     _, info, _ = built("3", "quarter")
     assert (info["model"], info["level"], info["symmetry"], info["size_factor"]) == ("3", "coarse", "quarter", 1.0)
@@ -299,7 +299,7 @@ def test_strictured_mesh(mini, tmp_path, model, symmetry, fraction):
     assert set(ft.values.tolist()) == expected
     if model != "1":
         # the hole mouths are faces: no fluid cell crosses the stent's outer radius (the algebraic ALE map's still
-        # region ends on faces, ureterfsi.mesh._solids)
+        # region ends on faces, ureterfsi.mesh.build._solids)
         x = mesh.geometry.x
         r = np.hypot(x[:, 0], x[:, 1])[mesh.geometry.dofmap.array.reshape(-1, 4)[ct.find(tags.FLUID)]]
         rs, tol = geom.stent_outer_radius, 1e-6 * geom.stent_outer_radius

@@ -1,4 +1,4 @@
-"""ureterfsi.probes against fields with known answers on small dolfinx meshes: point evaluation of a
+"""ureterfsi.fsi.probes against fields with known answers on small dolfinx meshes: point evaluation of a
 linear field (exact), von Mises stress of known stress states, location of a cell-field maximum, and
 the volumetric flux of a prescribed velocity through a boundary with the study's Nanson-form integrand."""
 from __future__ import annotations
@@ -19,7 +19,7 @@ from dolfinx import fem, mesh as dmesh
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
-from ureterfsi.probes import CellField, PointProbe, assemble_scalar, surface_line_points, von_mises
+from ureterfsi.fsi.probes import CellField, PointProbe, assemble_scalar, surface_line_points, von_mises
 
 COMM = MPI.COMM_WORLD
 
@@ -96,7 +96,7 @@ import numpy as np
 from mpi4py import MPI
 from dolfinx import fem, mesh as dmesh
 sys.path.insert(0, {src!r})
-from ureterfsi.probes import PointProbe
+from ureterfsi.fsi.probes import PointProbe
 cube = dmesh.create_unit_cube(MPI.COMM_WORLD, 4, 4, 4)
 f = fem.Function(fem.FunctionSpace(cube, ("DG", 1)))
 f.interpolate(lambda x: np.sin(7 * x[0]) + x[1] * x[2] + np.floor(4 * x[0]))      # jumps across cell faces
@@ -230,11 +230,11 @@ def test_flux_of_poiseuille_profile_through_a_disk(cylinder, dilation):
 
 @pytest.mark.parametrize("c", [0.0, 150.0])
 def test_end_face_pressure_mean_of_a_prescribed_field(c):
-    """ureterfsi.probes.end_face_pressure_forms on the r-z tube of the engine tests: p = a + b z + e r (P1, exact)
+    """ureterfsi.fsi.probes.end_face_pressure_forms on the r-z tube of the engine tests: p = a + b z + e r (P1, exact)
     with the ALE displacement u_r = c r^2 (c = 0: reference faces). The current-area mean on the face z = z_f is
     a + b z_f + e int r r'(r) r''(r) dr / int r'(r) r''(r) dr, r' = r + c r^2 (the current radius), r'' = dr'/dr."""
     from _engine_cases import INLET, LENGTH, OUTLET, R_I, tube_problem
-    from ureterfsi.probes import end_face_pressure_forms
+    from ureterfsi.fsi.probes import end_face_pressure_forms
 
     pb, _ = tube_problem()
     a, b, e = 130.0, -2.5e3, 4.0e4                     # Pa, Pa/m, Pa/m
@@ -261,10 +261,10 @@ def test_wall_line_lies_on_the_outer_facets(tmp_path, repo_root, symmetry, fract
     facet chords, and the radial displacement read there is that of an interpolated u = a(z) e_r to the P2
     interpolation error. The straight line x = R_o, y = 0 the fully coupled rung read before lies outside the wall
     under a stricture (NaN, left out of its maximum) and, with no mesh edge on the meridian (the full mesh), everywhere."""
-    from ureterfsi import tags
+    from ureterfsi.mesh import tags
     from ureterfsi.config import load_config, load_config_files
-    from ureterfsi.geometry import UreterGeometry
-    from ureterfsi.mesh import build_mesh, load_mesh
+    from ureterfsi.mesh.geometry import UreterGeometry
+    from ureterfsi.mesh.build import build_mesh, load_mesh
 
     mini = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
     cfg = load_config(mini, {"geometry": {"stricture_fraction": fraction, "stricture_length": 0.004,

@@ -207,7 +207,7 @@ def test_follower_pressure_tube_3d():
 def test_stability_load_power_counts_body_forces_and_follower_pressures():
     """P_load = int_wall b . v dA + int_outer (-p n) . v ds at a uniform velocity v = (c, c) on the undeformed
     plane channel (wall 4 mm x 1 mm, outer surface 4 mm long, n = (0, 1))."""
-    from ureterfsi.probes import assemble_scalar
+    from ureterfsi.fsi.probes import assemble_scalar
     from ureterfsi.stability.observer import StabilityObserver
 
     b, p, c = (2.0e3, 3.0e3), 100.0, 0.5

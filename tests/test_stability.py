@@ -17,7 +17,7 @@ import xarray as xr
 
 from ureterfsi import stability as S
 from ureterfsi.config import load_config_files, validate_config
-from ureterfsi.mesh import build_mesh
+from ureterfsi.mesh.build import build_mesh
 
 
 @pytest.fixture(scope="module")
@@ -176,7 +176,8 @@ def test_the_package_reads_cases_and_datasets_without_dolfinx():
 
 
 def test_matrix_dataset_and_stability_map(runs, hole_run, tmp_path):
-    from ureterfsi.plotting import save_figure, stability_map
+    from ureterfsi.plotting.paper import stability_map
+    from ureterfsi.plotting.style import save_figure
 
     paths = []
     for name, ds in (runs | {"hole": hole_run}).items():

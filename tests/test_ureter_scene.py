@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from ureterfsi.config import load_config_files
-from ureterfsi.mesh import build_mesh
+from ureterfsi.mesh.build import build_mesh
 from ureterfsi.scenes.ureter import pulse_sigma, peristaltic_pressure
-from ureterfsi import ladder
+from ureterfsi.analyses import ladder
 from ureterfsi.study import oneway
 
 from _compare import assert_same_arithmetic
@@ -172,9 +172,9 @@ def test_sub_domains_keep_their_tags(mini, mini_dir):
     each part carries its parent's tag (interfaces become tagged boundaries), and the parts tile the mesh."""
     from mpi4py import MPI
 
-    from ureterfsi import tags
+    from ureterfsi.mesh import tags
     from ureterfsi.fsi.submesh import extract, untagged_boundary_facets
-    from ureterfsi.mesh import load_mesh
+    from ureterfsi.mesh.build import load_mesh
 
     msh, ct, ft = load_mesh(mini_dir / "model3.msh", MPI.COMM_WORLD)
     fluid = extract(msh, ct, ft, [tags.FLUID])
@@ -214,7 +214,7 @@ def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_pa
     discretisation on each rung: wall elements of 0.25 mm here (half the coarse size), measured 3.1e-2 (at the
     coarse 0.5 mm 5.0e-2; the r-z wall alone moves 2.8 % on the stricture's flank from its 4 cells across to 16),
     within fig05's tolerance; max_wall_displacement 5.4e-3."""
-    from ureterfsi.geometry import UreterGeometry
+    from ureterfsi.mesh.geometry import UreterGeometry
 
     over = tmp_path / "stricture.yaml"
     over.write_text("geometry: {stricture_fraction: 0.7, stricture_length: 0.004, stricture_position: 0.005}\n"

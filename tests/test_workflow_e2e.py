@@ -15,9 +15,6 @@ from __future__ import annotations
 
 import sys
 
-if "dolfinx" in sys.modules and "netCDF4" not in sys.modules:   # would segfault on the first write
-    raise ImportError("netCDF4 must be imported before dolfinx (HDF5 clash, see ureterfsi.aggregate)")
-import netCDF4  # noqa: F401,E402  (before dolfinx: see ureterfsi.aggregate)
 import base64  # noqa: E402
 import io
 import json
@@ -144,7 +141,7 @@ def test_every_rule_ran(e2e):
 
 def test_run_datasets(e2e):
     import netCDF4 as nc4   # noqa: F401
-    from ureterfsi.metadata import VARIABLES as CF
+    from ureterfsi.data.cf import VARIABLES as CF
 
     cfg = e2e.cfg
     for m in e2e.models:
@@ -180,8 +177,8 @@ def test_field_file_of_the_coupled_run(e2e):
     urine vertex, the interface included, and the velocity the hole-flow figure samples on the run's probe
     line across the outlet-most hole agrees with the run's hole_velocity_y to the P1 output's interpolation
     error (< 10 % of the peak)."""
-    from ureterfsi.geometry import UreterGeometry
-    from ureterfsi.plotting_fields import hole_flow_section, urine_cells, urine_fields
+    from ureterfsi.mesh.geometry import UreterGeometry
+    from ureterfsi.data.fieldfiles import hole_flow_section, urine_cells, urine_fields
 
     m = e2e.stented[0]
     with xr.open_dataset(e2e.run_file(m), decode_times=False) as ds:

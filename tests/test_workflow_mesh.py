@@ -105,13 +105,13 @@ def test_local_runs_get_a_memory_budget(tmp_path):
 
 
 def test_physical_memory_is_memtotal(tmp_path):
-    """ureterfsi.machine.physical_memory_mib (the local budget's base): MemTotal in MiB; the kernel's count of
+    """ureterfsi.workflow.machine.physical_memory_mib (the local budget's base): MemTotal in MiB; the kernel's count of
     physical pages on this machine; a file without MemTotal is named in the error."""
     import os
 
     import pytest
 
-    from ureterfsi.machine import physical_memory_mib
+    from ureterfsi.workflow.machine import physical_memory_mib
 
     fake = tmp_path / "meminfo"
     fake.write_text("MemFree:  1024 kB\nMemTotal:  2048000 kB\n")

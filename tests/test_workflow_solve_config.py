@@ -6,7 +6,7 @@ import json
 import pytest
 
 from ureterfsi.config import RUN_SECTIONS, ConfigError, load_config, read_run_config, run_config, run_sections
-from ureterfsi.provenance import write_json
+from ureterfsi.data.provenance import write_json
 
 
 def test_run_config_round_trip(tmp_path):

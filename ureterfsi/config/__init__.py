@@ -9,7 +9,7 @@ Two layers, both reported as one line ``config error: <dotted.key>: <constraint,
    An integer key is refused as a float even when integral (``15.0``): JSON Schema's ``integer`` accepts
    15.0, but a float where a count is meant reaches the engine as a float.
 2. Physical/geometric consistency (``CHECKS``, run in order, first failure reported): plausible
-   magnitudes first (``ureterfsi.plausibility``: a value outside its range is most often a unit slip),
+   magnitudes first (``ureterfsi.config.ranges``: a value outside its range is most often a unit slip),
    then the cross-key rules the schema cannot express. Each check is a small function naming the key it
    blames; where a rule involves several keys the message quotes every value entering it.
 
@@ -22,8 +22,9 @@ syntax error is reported as ``file:line:column``.
 
 Modules by job: errors (ConfigError), reading (YAML files, --config values, deep_merge), schema (layer 1),
 plausible and checks (layer 2; check_config: both layers, as each design point is validated), validation
-(validate_config: check_config, then the design studies; load_config*), runs (run_sections, run_config,
-wall_sections, unmakeable), cli (the command line).
+(validate_config: check_config, then the design studies; load_config*), ranges (the plausible
+magnitudes), sections (the one list of the sections each job reads: run_sections, mesh_sections, wall_sections),
+runs (run_config, unmakeable), cli (the command line).
 """
 from __future__ import annotations
 
@@ -36,7 +37,8 @@ from .cli import main
 from .errors import ConfigError
 from .plausible import check_plausible
 from .reading import deep_merge, read_config_args, read_yaml
-from .runs import RUN_SECTIONS, WALL_GEOMETRY, read_run_config, run_config, run_sections, unmakeable, wall_sections
+from .runs import read_run_config, run_config, unmakeable
+from .sections import RUN_SECTIONS, WALL_GEOMETRY, mesh_sections, run_sections, wall_sections
 from .schema import REPO_ROOT, SCHEMA_PATH, load_schema, schema_defaults
 from .validation import DEFAULT_CONFIG, load_config, load_config_files, validate_config
 
@@ -47,6 +49,7 @@ __all__ = [
     "check_ladder", "check_levels", "check_mesh_sizes", "check_model_keys", "check_models", "check_peristalsis",
     "check_plausible", "check_resolution", "check_runs", "check_stability", "check_stent_offset", "check_stricture",
     "check_study", "check_symmetry", "check_time", "check_ureter_material", "check_ureter_wall", "deep_merge",
-    "load_config", "load_config_files", "load_schema", "main", "read_config_args", "read_run_config", "read_yaml",
+    "load_config", "load_config_files", "load_schema", "main", "mesh_sections", "read_config_args", "read_run_config",
+    "read_yaml",
     "run_config", "run_sections", "schema_defaults", "unmakeable", "validate_config", "wall_sections",
 ]

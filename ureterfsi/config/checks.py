@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-from ureterfsi.geometry import StentModel, UreterGeometry, hole_pair_positions
-from ureterfsi.plausibility import SHEAR_MODULUS
+from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.config.ranges import SHEAR_MODULUS
 from ureterfsi.stability.naming import Case
 
 from .errors import ConfigError, fmt
@@ -76,7 +76,7 @@ def check_hole_end_clearance(cfg):
                           f"this span must exceed the hole diameter {fmt(g['hole_diameter'])} m, got c = {fmt(c)}")
 
 
-# ---- stricture (ureterfsi.geometry.Stricture)
+# ---- stricture (ureterfsi.mesh.geometry.Stricture)
 
 def check_stricture(cfg):
     """A stricture (fraction > 0) lies inside the segment and keeps the narrowest gap (stent to wall, or the lumen

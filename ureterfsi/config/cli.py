@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import sys
 
-from ureterfsi.provenance import config_hash
+from ureterfsi.data.provenance import config_hash
 
 from .errors import ConfigError
 from .validation import load_config_files

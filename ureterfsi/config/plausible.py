@@ -1,7 +1,7 @@
-"""Plausible magnitudes: every number of the configuration within its range (ureterfsi.plausibility)."""
+"""Plausible magnitudes: every number of the configuration within its range (ureterfsi.config.ranges)."""
 from __future__ import annotations
 
-from ureterfsi.plausibility import Range, range_of, unit_slip
+from ureterfsi.config.ranges import Range, range_of, unit_slip
 
 from .errors import ConfigError, dotted, fmt
 
@@ -27,7 +27,7 @@ def implausible(value: float, rng: Range) -> str:
 
 
 def check_plausible(cfg):
-    """Every magnitude within its plausible range (ureterfsi.plausibility.RANGES)."""
+    """Every magnitude within its plausible range (ureterfsi.config.ranges.RANGES)."""
     for key, value in _leaves(cfg):
         rng = range_of(key)
         if rng is not None and not rng.low <= value <= rng.high:

@@ -6,6 +6,7 @@ import json
 from .checks import check_run_config
 from .errors import ConfigError, fmt
 from .schema import schema_defaults
+from .sections import RUN_SECTIONS
 
 
 def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
@@ -25,20 +26,6 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
         return (f"geometry.stent_offset {fmt(cfg['geometry']['stent_offset'])} m breaks the x = 0 mirror plane: "
                 f"model {model} has no quarter model; use symmetry half (y >= 0)")
     return ""
-
-
-# the geometry the r-z wall solve reads (ureterfsi.scenes.wall_rz.WallModel): the stent and its holes do not enter
-WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
-                 "stricture_position")
-
-
-RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")
-
-
-def run_sections(cfg: dict, model: str) -> dict:
-    """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
-    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
-    return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
 
 
 def run_config(sections: dict, model: str) -> dict:
@@ -78,11 +65,3 @@ def read_run_config(path, model: str) -> dict:
     except ConfigError as err:
         raise ConfigError(f"<run config> {path}: {err.key.removeprefix('<run config>').strip()}",
                           err.constraint) from None
-
-
-def wall_sections(cfg: dict) -> dict:
-    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
-    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
-    return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
-        k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
-        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}

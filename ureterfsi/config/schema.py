@@ -5,14 +5,14 @@ import copy
 import math
 import re
 from functools import lru_cache
-from pathlib import Path
 
 import yaml
 from jsonschema import Draft202012Validator, validators
 
+from ureterfsi import REPO_ROOT
+
 from .errors import ConfigError, dotted, fmt
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
 
 

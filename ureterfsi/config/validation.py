@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import copy
 
-from .. import designs
+from ureterfsi.designs import space as designs
 from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml

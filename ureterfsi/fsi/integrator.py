@@ -24,7 +24,7 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
-from ..provenance import atomic_path
+from ureterfsi.data.provenance import atomic_path
 from .newton import NewtonDivergence
 from .problem import MonolithicFSI
 from .progress import Progress

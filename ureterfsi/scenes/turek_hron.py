@@ -36,7 +36,7 @@ from mpi4py import MPI
 from ureterfsi.fsi import (DirichletCondition, FluidRegion, LinearElastic, MonolithicFSI, NewtonDivergence,
                            NewtonianFluid, OpenBoundary, Scene, SolidRegion, SolverOptions)
 from ureterfsi.fsi import physics
-from ureterfsi.probes import PointProbe
+from ureterfsi.fsi.probes import PointProbe
 
 
 # --- geometry and tags --------------------------------------------------------------------------

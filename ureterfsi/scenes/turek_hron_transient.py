@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 from ureterfsi.fsi import BodyForce, MonolithicFSI, Observer, SolverOptions, TimeIntegrator, TimeSettings
 from ureterfsi.fsi import physics
-from ureterfsi.provenance import atomic_path
+from ureterfsi.data.provenance import atomic_path
 from ureterfsi.scenes.turek_hron import (FSI2, FSI3, GEOMETRY, RAMP_TIME, TAGS, ObstacleForces, Tags, build_mesh,
                                         make_scene, point_value, solve_steady_with_continuation)
 

@@ -12,7 +12,7 @@ import math
 
 import ufl
 
-from .. import tags
+from ureterfsi.mesh import tags
 from ..fsi import (DirichletCondition, FluidRegion, LinearElastic, MooneyRivlin, NewtonianFluid,
                    OpenBoundary, Scene, SolidRegion, SurfaceLoad)
 

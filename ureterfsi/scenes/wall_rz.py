@@ -1,5 +1,5 @@
 """The ureter wall alone in the axisymmetric r-z formulation (x = r, y = z): the scene of the calibration
-(ureterfsi.calibration, paper §2.4.2) and of the wall step of the one-way rung (ureterfsi.study.oneway).
+(ureterfsi.study.calibration, paper §2.4.2) and of the wall step of the one-way rung (ureterfsi.study.oneway).
 
 Rectangle [R_i, R_o] x [0, L] (an axisymmetric stricture moves both surfaces inward by R_i f b(z)),
 Mooney-Rivlin mixed u-pi, the Gaussian peristaltic dead traction (eq. 21) on the outer surface, the inner
@@ -17,11 +17,11 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from .. import tags
+from ureterfsi.mesh import tags
 from ..fsi import (DirichletCondition, MonolithicFSI, MooneyRivlin, NewtonDivergence, Scene, SolidRegion,
                    SolverOptions, SurfaceLoad)
 from ..fsi.tagging import tag_cells, tag_facets
-from ..geometry import Stricture
+from ureterfsi.mesh.geometry import Stricture
 from .ureter import peristaltic_traction, pulse_sigma
 
 log = logging.getLogger("ureterfsi.scenes.wall_rz")

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from ..config import checks   # the module, not its names: importing it runs this package (checks uses .naming)
 from ..config.reading import deep_merge
 from ..config.schema import schema_defaults
-from ..metadata import cf_meta
+from ureterfsi.data.cf import cf_meta
 from .naming import Case
 
 SYMMETRY = "axisymmetric"

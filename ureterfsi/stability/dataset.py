@@ -7,9 +7,9 @@ from dataclasses import dataclass, fields
 import numpy as np
 import xarray as xr
 
-from ..checked_io import Contract, open_netcdf
-from ..metadata import annotate, write_netcdf
-from ..provenance import provenance_attrs
+from ureterfsi.data.checked import Contract, open_netcdf
+from ureterfsi.data.cf import annotate, write_netcdf
+from ureterfsi.data.provenance import provenance_attrs
 from .cases import SCENES
 
 # time series of a case (StabilityObserver), one value per recorded state

@@ -12,7 +12,8 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
 from ..fsi import LinearElastic, MonolithicFSI, MooneyRivlin, Observer, physics
-from ..probes import assemble_scalar, flux_volume_forms
+from ureterfsi.mesh import tags
+from ureterfsi.fsi.probes import assemble_scalar, flux_volume_forms
 from .dataset import SERIES
 from .limits import StabilityLimit
 
@@ -42,7 +43,7 @@ class StabilityObserver(Observer):
         J = ufl.det(F)
         n_da = J * ufl.inv(F).T * ops.normal()
         w = ops.weight
-        forms = flux_volume_forms(pb)
+        forms = flux_volume_forms(pb, tags.INLET, tags.OUTLET)
         rho = sc.fluid.material.density
         forms["kinetic_energy_fluid"] = 0.5 * rho * ufl.dot(V, V) * J * w * dx(tuple(pb.fluid_tags))
         ke_s, el = 0, 0   # stay 0 (recorded as 0.0) in a fluid-alone scene

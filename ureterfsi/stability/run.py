@@ -13,13 +13,13 @@ import numpy as np
 import xarray as xr
 from mpi4py import MPI
 
-from ..checked_io import MESH_SIDECAR, read_json
+from ureterfsi.data.checked import MESH_SIDECAR, read_json
 from ..fsi import MonolithicFSI, NewtonDivergence, TimeIntegrator, TimeSettings
 from ..fsi.integrator import MeshInversion, StepFailure
-from ..geometry import UreterGeometry
-from ..mesh import build_mesh, load_mesh
-from ..metadata import annotate
-from ..provenance import provenance_attrs
+from ureterfsi.mesh.geometry import UreterGeometry
+from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.data.cf import annotate
+from ureterfsi.data.provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre, ureter_scene
 from ..study.oneway import fluid_problem, wall_history
 from ..study.options import solver_options

@@ -7,5 +7,9 @@ probes    the ureter probes (fluxes, hole flows, wall displacement, stent stress
 pipeline  the run sequence every rung shares (mesh, counts, checkpoints, integration, provenance, write)
 coupled   the fully coupled rung (monolithic ALE FSI)
 oneway    the one-way rung: r-z wall -> urine alone -> quasi-static stent
+fields    the run's field files for ParaView (XDMF + HDF5 at the probe times)
 cli       `python -m ureterfsi.study` and the rung dispatch
+calibration  the wall's peak traction against the paper's wall displacement (`python -m ureterfsi.study.calibration`)
 """
+
+__all__ = ["calibration", "cli", "coupled", "fields", "oneway", "options", "pipeline", "probes"]

@@ -10,7 +10,7 @@ import sys
 import xarray as xr
 from mpi4py import MPI
 
-from ..checked_io import BadFile
+from ureterfsi.data.checked import BadFile
 from ..config import ConfigError, load_config, load_config_files, read_run_config
 from ..fsi import SolveFailure
 from . import coupled, oneway

@@ -6,9 +6,9 @@ from functools import partial
 
 import xarray as xr
 
-from ..fields import coupled_parts
+from ureterfsi.study.fields import coupled_parts
 from ..fsi.problem import MonolithicFSI
-from ..geometry import StentModel
+from ureterfsi.mesh.geometry import StentModel
 from ..scenes.ureter import ureter_scene
 from . import pipeline
 from .options import RunSpec, solver_options

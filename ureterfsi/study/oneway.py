@@ -35,8 +35,8 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .. import tags
-from ..fields import oneway_parts
+from ureterfsi.mesh import tags
+from ureterfsi.study.fields import oneway_parts
 from ..fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings, physics
 from ..fsi.ale_jacobian import ALEJacobian
 from ..fsi.operators import Operators
@@ -44,12 +44,12 @@ from ..fsi.constraints import dirichlet_bcs
 from ..fsi.problem import MonolithicFSI
 from ..fsi.scene import DirichletCondition
 from ..fsi.submesh import SubDomain, extract
-from ..geometry import StentModel, UreterGeometry
-from ..probes import CellField, PointProbe, von_mises
-from ..checked_io import BadFile, Contract, open_netcdf
+from ureterfsi.mesh.geometry import StentModel, UreterGeometry
+from ureterfsi.fsi.probes import CellField, PointProbe, von_mises
+from ureterfsi.data.checked import BadFile, Contract, open_netcdf
 from ..config import wall_sections
-from ..metadata import WALL_MOTION_VARIABLES, attach, write_netcdf
-from ..provenance import config_hash, provenance_attrs
+from ureterfsi.data.cf import WALL_MOTION_VARIABLES, attach, write_netcdf
+from ureterfsi.data.provenance import config_hash, provenance_attrs
 from ..scenes.ureter import materials, ureter_fluid_scene
 from ..scenes.wall_rz import WallModel
 from . import pipeline

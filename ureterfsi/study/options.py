@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import dolfinx
 
-from .. import __version__
-from ..checked_io import sha256_file
+from ureterfsi import __version__
+from ureterfsi.data.checked import sha256_file
 from ..config import run_sections
 from ..fsi import SolverOptions, TimeSettings
 

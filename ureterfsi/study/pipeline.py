@@ -11,11 +11,11 @@ from typing import Callable
 import xarray as xr
 from mpi4py import MPI
 
-from ..fields import field_writer
+from ureterfsi.study.fields import field_writer
 from ..fsi import TimeIntegrator, TimeSettings
 from ..fsi.problem import MonolithicFSI
-from ..mesh import load_mesh
-from ..metadata import write_netcdf
+from ureterfsi.mesh.build import load_mesh
+from ureterfsi.data.cf import write_netcdf
 from .options import RunSpec, time_settings
 from .probes import UreterProbes, probes_dataset
 
@@ -26,7 +26,7 @@ log = logging.getLogger("ureterfsi.study")
 class Posed:
     """A rung's problem on the run's mesh: what the shared sequence integrates and records.
 
-    parts: quantities -> field-output parts (ureterfsi.fields); solver: the dataset's `solver` attribute;
+    parts: quantities -> field-output parts (ureterfsi.study.fields); solver: the dataset's `solver` attribute;
     observers: the rung's own, after the probes; attrs, summary: the rung's dataset attributes and the tail
     of the closing progress line, both read once the run has ended; description: follows the cell count
     in the opening progress line."""

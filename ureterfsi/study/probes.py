@@ -23,15 +23,15 @@ from dolfinx.fem import petsc as fem_petsc
 from dolfinx.mesh import compute_midpoints
 from mpi4py import MPI
 
-from .. import tags
+from ureterfsi.mesh import tags
 from ..fsi import Observer
 from ..fsi import physics
 from ..fsi.problem import MonolithicFSI
-from ..geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
-from ..metadata import cf_meta
-from ..probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
+from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
+from ureterfsi.data.cf import cf_meta
+from ureterfsi.fsi.probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
                       inside_radius, surface_line_points, von_mises)
-from ..provenance import provenance_attrs
+from ureterfsi.data.provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre
 from .options import RunSpec
 
@@ -41,7 +41,7 @@ N_LINE, N_HOLE = 201, 21
 class CoupledWall:
     """Ureter outer-wall radial displacement read from the coupled state at the material points of the outer
     surface on the meridian y = 0, x > 0 (or the r-z outer boundary) at each z: u_x (u_r) where the mesh's own
-    outer facets meet that line (ureterfsi.probes.surface_line_points), so on the surface R_o(z) a stricture
+    outer facets meet that line (ureterfsi.fsi.probes.surface_line_points), so on the surface R_o(z) a stricture
     narrows, and in every symmetry (a half or full mesh need not have a mesh edge on that line)."""
 
     def __init__(self, pb: MonolithicFSI, z: np.ndarray):
@@ -102,7 +102,8 @@ class UreterProbes(Observer):
         e_z = ufl.as_vector([0.0, 0.0, 1.0])
         rel = ops.vec(v) - ops.vec(w)
         ds, dx = pb.ds, pb.dx
-        self.forms = {k: fem.form(f) for k, f in (flux_volume_forms(pb) | end_face_pressure_forms(pb)).items()} | {
+        self.forms = {k: fem.form(f) for k, f in (flux_volume_forms(pb, tags.INLET, tags.OUTLET)
+                                                 | end_face_pressure_forms(pb, tags.INLET, tags.OUTLET)).items()} | {
             "outlet_area": fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight * ds(tags.OUTLET)),
             "outlet_axial_velocity_integral": fem.form(ufl.dot(ops.vec(v), e_z) * ufl.sqrt(ufl.dot(n_da, n_da))
                                                        * ops.weight * ds(tags.OUTLET)),

@@ -1,5 +1,5 @@
 # Study datasets (paper §3): the per-run probe files combined across stent models (one mesh level) and
-# across mesh levels (mesh-convergence study, paper §3.1). ureterfsi.aggregate reads model, level and
+# across mesh levels (mesh-convergence study, paper §3.1). ureterfsi.analyses.aggregate reads model, level and
 # symmetry from each file's attributes; the rules only choose which runs enter.
 
 
@@ -46,7 +46,7 @@ rule aggregate_convergence:
 
 # Grid Convergence Index (Celik et al. 2008) of the mesh-convergence study: peak outlet flux, peak maximum
 # stent von Mises stress and the probe-line stress at GCI_POINTS_Z, from the three finest levels
-# (ureterfsi.gci). h = (V/N)^(1/3) with V the analytic volume of the mesh (the same on every level; read from
+# (ureterfsi.analyses.gci). h = (V/N)^(1/3) with V the analytic volume of the mesh (the same on every level; read from
 # the last level's mesh sidecar). Needs at least three mesh levels (all_figures asks for it only then).
 # probe-line points: a quarter, half and three quarters of the segment (12.5, 25, 37.5 mm for L = 50 mm)
 GCI_POINTS_Z = [

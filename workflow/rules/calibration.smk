@@ -1,6 +1,6 @@
 # Design rule of the peristaltic load (paper §2.4.2: the Gaussian pulse gives ~1 mm wall deformation),
 # checked by the solver on an axisymmetric wall-only model, and the calibration rule of the
-# Mooney-Rivlin coefficients (ureterfsi.calibration). Cheap: a 2D r-z wall, ~1-2 min on one core.
+# Mooney-Rivlin coefficients (ureterfsi.study.calibration). Cheap: a 2D r-z wall, ~1-2 min on one core.
 
 
 rule calibration:

@@ -3,10 +3,11 @@
 import json
 import sys
 
-from ureterfsi import designs as ureter_designs
+from ureterfsi.designs import space as ureter_designs
 from ureterfsi.config import (
     ConfigError,
     deep_merge,
+    mesh_sections,
     read_config_args,
     read_yaml,
     run_sections,
@@ -14,7 +15,7 @@ from ureterfsi.config import (
     validate_config,
     wall_sections,
 )
-from ureterfsi.machine import physical_memory_mib
+from ureterfsi.workflow.machine import physical_memory_mib
 from ureterfsi.stability import case_by_name, case_setup
 from ureterfsi.stability import cases as stability_cases
 
@@ -287,7 +288,7 @@ def design_mesh_inputs(w):
     """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
     st, p = DESIGN_MESHES[w.mesh_id]
     return json.dumps(
-        ureter_designs.mesh_sections(p.config, st.model, st.level, p.symmetry),
+        mesh_sections(p.config, st.model, st.level, p.symmetry),
         sort_keys=True,
     )
 
@@ -305,7 +306,7 @@ def design_solve_study(w):
     """The configuration entering a design point's solve, with its rung and symmetry (rerun trigger)."""
     st = DESIGNS[w.design_study]
     p = st.point(w.point)
-    sections = ureter_designs.solve_sections(p.config, st.model)
+    sections = run_sections(p.config, st.model)
     return json.dumps(
         sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True
     )
@@ -330,7 +331,7 @@ def design_corner_study(w):
     """The configuration entering a corner's solve, with its rung and symmetry (rerun trigger)."""
     st = DESIGNS[w.design_study]
     c, cfg = ureter_designs.corner_solve_request(st, w.corner, w.corner_rung)
-    sections = ureter_designs.solve_sections(cfg, st.model)
+    sections = run_sections(cfg, st.model)
     return json.dumps(
         sections | {"rung": w.corner_rung, "symmetry": c.symmetry}, sort_keys=True
     )
@@ -352,7 +353,7 @@ def design_dataset_inputs(w):
 
 
 def design_corner_runs(w):
-    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.corner_run_paths)."""
+    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.space.corner_run_paths)."""
     pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()
     return [f for pair in pairs for f in pair]
 

@@ -1,10 +1,10 @@
-# Design studies (config `design_studies`, ureterfsi.designs): every point its own chain of jobs.
+# Design studies (config `design_studies`, ureterfsi.designs.space): every point its own chain of jobs.
 # Meshes and wall motions are content-addressed (shared by every point with the same geometry / wall):
 #   results/designs/meshes/{mesh_id}.msh        design_mesh
 #   results/designs/wall_motion/{wall_id}.nc    design_wall_motion (one-way rung)
 #   results/designs/{study}/{point}/run.nc      design_solve
 #   results/designs/{study}/rung_check/{corner}/{rung}.nc   design_corner_solve: a corner of the design space on
-#       the segment, on the study's rung and fully coupled (ureterfsi.rung_check); a corner that is a point of a
+#       the segment, on the study's rung and fully coupled (ureterfsi.designs.rung_check); a corner that is a point of a
 #       study on the segment reuses the point's run
 #   results/designs/{study}/rung_check.nc       design_rung_check: the rung error per corner and quantity
 #   results/designs/{study}.nc                  design_dataset

@@ -1,4 +1,4 @@
-# Figures drawn from the field files of one run (ureterfsi.fields, ureterfsi.plotting_fields; beyond the
+# Figures drawn from the field files of one run (ureterfsi.study.fields, ureterfsi.plotting.fields; beyond the
 # paper): the urine flow on the mid-plane around the outlet-most side hole at the instants of Figs. 6-9, and
 # the urine pressure along the segment at the instants of Fig. 5. The run is the study run of the Fig. 2
 # model (figures.domain_model), so the figures cost only their plotting. Target: all_field_figures (in all).

@@ -174,7 +174,7 @@ rule table1:
 
 
 rule table_gci:
-    # Grid Convergence Index of the mesh-convergence study (ureterfsi.gci; beyond the paper)
+    # Grid Convergence Index of the mesh-convergence study (ureterfsi.analyses.gci; beyond the paper)
     input:
         gci=rules.gci.output[0],
     output:

@@ -1,6 +1,6 @@
 # Fidelity ladder: runs of config `ladder.model` on each rung (fidelity, symmetry, mesh level,
 # time step) over [0, ladder.end], measured against the reference rung -> dataset, speed-accuracy figure and
-# table (ureterfsi.ladder). Target: `snakemake --cores 2 ladder` (not part of `all`: the fully coupled
+# table (ureterfsi.analyses.ladder). Target: `snakemake --cores 2 ladder` (not part of `all`: the fully coupled
 # reference is the expensive run this ladder exists to avoid). A killed rung resumes from its checkpoint.
 
 LADDER = config.get("ladder")

@@ -1,9 +1,9 @@
 """Snakemake script of rule `aggregate_convergence`: the runs of the convergence model on every mesh level
--> the mesh-convergence dataset (paper §3.1, Fig. 3; ureterfsi.aggregate.combine_levels)."""
+-> the mesh-convergence dataset (paper §3.1, Fig. 3; ureterfsi.analyses.aggregate.combine_levels)."""
 import logging
 
-from ureterfsi.aggregate import combine_levels, write_dataset  # first: imports netCDF4 before dolfinx
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import combine_levels, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,9 +1,9 @@
 """Snakemake script of rule `aggregate_models`: the runs of every stent model on one mesh level -> one
-dataset with dim `model` (ureterfsi.aggregate.combine_models)."""
+dataset with dim `model` (ureterfsi.analyses.aggregate.combine_models)."""
 import logging
 
-from ureterfsi.aggregate import combine_models, write_dataset  # first: imports netCDF4 before dolfinx
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import combine_models, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,8 +1,8 @@
 """Snakemake script of rule `mesh`: one gmsh mesh and its JSON sidecar (paper §2.1, §2.4.1)."""
 import logging
 
-from ureterfsi.mesh import build_mesh
-from ureterfsi.workflow_log import run_script
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,8 +1,8 @@
 """Snakemake script of rule `calibration`: design-rule check and calibration of the wall (paper §2.4.2)."""
 import logging
 
-from ureterfsi.calibration import format_report, write_report
-from ureterfsi.workflow_log import run_script
+from ureterfsi.study.calibration import format_report, write_report
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,12 +1,12 @@
 """Snakemake script of rule `design_dataset`: the study's dataset from its points' runs and its rung check
-(ureterfsi.design_results)."""
+(ureterfsi.designs.results)."""
 import logging
 from pathlib import Path
 
-from ureterfsi.aggregate import write_dataset
-from ureterfsi.checked_io import open_netcdf
-from ureterfsi.design_results import RUNG_CHECK, study_dataset
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import write_dataset
+from ureterfsi.data.checked import open_netcdf
+from ureterfsi.designs.results import RUNG_CHECK, study_dataset
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,11 +1,11 @@
-"""Snakemake script of rules `design_figures`, `design_map` and `design_sensitivity` (ureterfsi.plotting_designs)."""
+"""Snakemake script of rules `design_figures`, `design_map` and `design_sensitivity` (ureterfsi.plotting.designs)."""
 import logging
 
-from ureterfsi.checked_io import open_netcdf
-from ureterfsi.design_results import DESIGN_DATASET
-from ureterfsi.plotting import save_figure
-from ureterfsi.plotting_designs import map_figure, parameters_figure, sensitivity_figure
-from ureterfsi.workflow_log import run_script
+from ureterfsi.data.checked import open_netcdf
+from ureterfsi.designs.results import DESIGN_DATASET
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.plotting.designs import map_figure, parameters_figure, sensitivity_figure
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 DRAW = {"design_figures": parameters_figure, "design_map": map_figure, "design_sensitivity": sensitivity_figure}

@@ -1,9 +1,9 @@
-"""Snakemake script of rule `design_mesh`: the mesh of one or more design points (ureterfsi.designs)."""
+"""Snakemake script of rule `design_mesh`: the mesh of one or more design points (ureterfsi.designs.space)."""
 import logging
 
-from ureterfsi.designs import mesh_request
-from ureterfsi.mesh import build_mesh
-from ureterfsi.workflow_log import run_script
+from ureterfsi.designs.space import mesh_request
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

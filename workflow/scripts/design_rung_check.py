@@ -1,11 +1,11 @@
 """Snakemake script of rule `design_rung_check`: a study's rung against the fully coupled model at its corners
-(ureterfsi.design_results.rung_check_dataset, ureterfsi.rung_check)."""
+(ureterfsi.designs.results.rung_check_dataset, ureterfsi.designs.rung_check)."""
 import logging
 
-from ureterfsi.aggregate import write_dataset
-from ureterfsi.designs import corner_run_paths, studies
-from ureterfsi.design_results import rung_check_dataset
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import write_dataset
+from ureterfsi.designs.space import corner_run_paths, studies
+from ureterfsi.designs.results import rung_check_dataset
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,14 +1,16 @@
 """Snakemake script of the field-figure rules (workflow/rules/fields.smk): figures drawn from a run's field
-files (ureterfsi.plotting_fields), chosen by the rule name, written atomically in every configured format."""
+files (ureterfsi.plotting.fields), chosen by the rule name, written atomically in every configured format."""
 import logging
 import os
 from pathlib import Path
 
 from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
-from ureterfsi import plotting, plotting_fields
-from ureterfsi.checked_io import RUN_FILE, open_netcdf
-from ureterfsi.geometry import UreterGeometry
-from ureterfsi.workflow_log import run_script
+from ureterfsi.data import fieldfiles
+from ureterfsi.plotting import fields as plotting_fields
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.data.checked import RUN_FILE, open_netcdf
+from ureterfsi.mesh.geometry import UreterGeometry
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 
@@ -16,7 +18,7 @@ smk = snakemake  # noqa: F821
 def draw(rule: str):
     run = open_netcdf(smk.input.run, RUN_FILE)
     # the field directory as a clean path (messages name its files): fields_path is relative to the run file
-    fs = plotting_fields.urine_fields(Path(os.path.normpath(Path(smk.input.run).parent / run.attrs["fields_path"])))
+    fs = fieldfiles.urine_fields(Path(os.path.normpath(Path(smk.input.run).parent / run.attrs["fields_path"])))
     geom = UreterGeometry.from_config(smk.config)
     model = smk.config["models"][str(run.attrs["model"])]
     what = (f"model {run.attrs['model']} ({model['label']} between hole pairs), {run.attrs['fidelity']}, "
@@ -24,11 +26,11 @@ def draw(rule: str):
     times = [float(t) for t in smk.params.times]
     if rule == "field_hole_flow":
         hole_z = float(run["hole_z"].max())
-        sec = plotting_fields.hole_flow_section(fs, times, hole_z, geom)
+        sec = fieldfiles.hole_flow_section(fs, times, hole_z, geom)
         return plotting_fields.fig_hole_flow(sec, hole_z, geom, f"Urine flow at the outlet-most side hole "
                                                                 f"(z = {hole_z * 1e3:g} mm)\n{what}")
     if rule == "field_pressure":
-        lines = plotting_fields.pressure_lines(fs, times, geom)
+        lines = fieldfiles.pressure_lines(fs, times, geom)
         centres = [float(run["pulse_centre"].sel(time=t, method="nearest")) for t in times]
         return plotting_fields.fig_pressure_along(lines, times, float(smk.config["fluid"]["reference_pressure"]),
                                                   centres, f"Urine pressure along the segment\n{what}")
@@ -37,7 +39,7 @@ def draw(rule: str):
 
 def main():
     fig = draw(smk.rule)
-    plotting.save_figure(fig, list(smk.output), dpi=float(smk.params.figures["dpi"]))
+    save_figure(fig, list(smk.output), dpi=float(smk.params.figures["dpi"]))
     logging.info("%s -> %s", smk.rule, list(smk.output))
 
 

@@ -1,12 +1,12 @@
 """Snakemake script of rules `gci` (workflow/rules/aggregate.smk: mesh-convergence dataset -> GCI dataset) and
-`table_gci` (workflow/rules/figures.smk: GCI dataset -> CSV and Markdown table), both via ureterfsi.gci
+`table_gci` (workflow/rules/figures.smk: GCI dataset -> CSV and Markdown table), both via ureterfsi.analyses.gci
 (Grid Convergence Index, Celik et al. 2008). Outputs are written atomically."""
 import logging
 
-from ureterfsi.aggregate import CONVERGENCE_DATASET, write_dataset  # first: imports netCDF4 before dolfinx
-from ureterfsi import gci
-from ureterfsi.checked_io import open_netcdf
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import CONVERGENCE_DATASET, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses import gci
+from ureterfsi.data.checked import open_netcdf
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

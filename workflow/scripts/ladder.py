@@ -1,14 +1,14 @@
 """Snakemake script of rule `ladder` (workflow/rules/ladder.smk): rung runs -> ladder dataset, Markdown table,
-speed-accuracy figure and the rungs' figure quantities over each other (ureterfsi.ladder,
-ureterfsi.plotting_ladder), all written atomically."""
+speed-accuracy figure and the rungs' figure quantities over each other (ureterfsi.analyses.ladder,
+ureterfsi.plotting.ladder), all written atomically."""
 import logging
 
-from ureterfsi.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
-from ureterfsi import ladder
-from ureterfsi.plotting import save_figure
-from ureterfsi.plotting_ladder import ladder_overlay, ladder_pareto
-from ureterfsi.provenance import atomic_path
-from ureterfsi.workflow_log import run_script
+from ureterfsi.analyses.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses import ladder
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.plotting.ladder import ladder_overlay, ladder_pareto
+from ureterfsi.data.provenance import atomic_path
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

@@ -1,11 +1,12 @@
 """Snakemake script of every figure rule (workflow/rules/figures.smk): the figure is chosen by the rule
-name; the outputs are written atomically in every configured format (ureterfsi.plotting)."""
+name; the outputs are written atomically in every configured format (ureterfsi.plotting.paper)."""
 import logging
 
 from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
-from ureterfsi import plotting
-from ureterfsi.checked_io import MESH_SIDECAR, open_netcdf, read_json
-from ureterfsi.workflow_log import run_script
+from ureterfsi.plotting import paper as plotting
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.data.checked import MESH_SIDECAR, open_netcdf, read_json
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 
@@ -42,10 +43,10 @@ def main():
     if smk.rule == "table1":
         cfg = {"models": smk.params.models}
         rows = plotting.table1(cfg, list(smk.input.sidecars))
-        plotting.write_table(rows, smk.output.csv, smk.output.md)
+        plotting.write_table1(rows, smk.output.csv, smk.output.md)
     else:
         fig = draw(smk.rule)
-        plotting.save_figure(fig, list(smk.output), dpi=float(smk.params.figures["dpi"]))
+        save_figure(fig, list(smk.output), dpi=float(smk.params.figures["dpi"]))
     logging.info("%s -> %s", smk.rule, list(smk.output))
 
 

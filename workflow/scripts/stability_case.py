@@ -3,7 +3,7 @@
 import logging
 
 from ureterfsi.stability import case_by_name, run_case, write_case  # first: netCDF4 before dolfinx
-from ureterfsi.workflow_log import run_script
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

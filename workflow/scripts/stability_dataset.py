@@ -3,8 +3,8 @@
 import logging
 
 from ureterfsi.stability import combine, outcome_table, write_case  # first: netCDF4 before dolfinx
-from ureterfsi.provenance import atomic_path
-from ureterfsi.workflow_log import run_script
+from ureterfsi.data.provenance import atomic_path
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 

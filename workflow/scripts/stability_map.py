@@ -1,10 +1,11 @@
 """Snakemake script of rule `stability_map`: the stability dataset -> results/figures/stability_map.{png,pdf}
-(ureterfsi.plotting.stability_map)."""
+(ureterfsi.plotting.paper.stability_map)."""
 import logging
 
-from ureterfsi.plotting import save_figure, stability_map  # first: netCDF4 before anything else
-from ureterfsi.checked_io import Contract, open_netcdf
-from ureterfsi.workflow_log import run_script
+from ureterfsi.plotting.paper import stability_map
+from ureterfsi.plotting.style import save_figure
+from ureterfsi.data.checked import Contract, open_netcdf
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 STABILITY_DATASET = Contract("stability dataset", attrs=("cases",), variables=("case", "outcome"))

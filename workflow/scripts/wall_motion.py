@@ -2,7 +2,7 @@
 by every one-way run of the study (ureterfsi.study.oneway.write_wall_motion)."""
 
 from ureterfsi.study.oneway import write_wall_motion
-from ureterfsi.workflow_log import run_script
+from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821
 run_script(smk, lambda: write_wall_motion(smk.config, smk.output[0]))

@@ -9,12 +9,12 @@ each its own job; the dataset records, per corner and per scalar quantity, the r
 
     e = |q_rung - q_fully_coupled| / s_q
 
-with s_q the fully coupled run's own scale of the quantity at the same corner, as the ladder (``ureterfsi.ladder``)
+with s_q the fully coupled run's own scale of the quantity at the same corner, as the ladder (``ureterfsi.analyses.ladder``)
 divides by the max norm of the reference: for the outlet-flow scalars (peak and mean outlet flow) the largest
 |outlet flow| over the run, for the backflow volume the volume through the outlet (integral |Q_out| dt) - a peak or
 a mean of a flow that barely turns is near 0 in a short window and would make |q_fc| meaningless as a scale (2 steps
 on the 10 mm segment: peak outlet flow 0 on one rung, 1e-12 m3/s on the other, "100 %") - and for the other
-quantities (shares, peak stress, peak displacement, peak pressure drop) |q_fully_coupled| itself (``ureterfsi.design_results.error_scales``; NaN
+quantities (shares, peak stress, peak displacement, peak pressure drop) |q_fully_coupled| itself (``ureterfsi.designs.results.error_scales``; NaN
 where the scale is 0 and the values differ, 0 where they agree).
 
 Corners (``corners``): ``all`` - every combination of each varied parameter's minimum and maximum (2^D); ``axes``
@@ -27,9 +27,9 @@ x_j from the centre in units of the distance from the centre to the corner on th
 the region whose every corner is within the tolerance is trusted; the dataset and the figure caption name the
 others.
 
-Pure functions here (no solver, no ``ureterfsi.designs``, no ``ureterfsi.design_results``): the corner values, the
-region test, the segment's configuration and the errors. ``ureterfsi.designs`` expands a study's corners,
-``ureterfsi.design_results`` writes the dataset variables.
+Pure functions here (no solver, no ``ureterfsi.designs.space``, no ``ureterfsi.designs.results``): the corner values, the
+region test, the segment's configuration and the errors. ``ureterfsi.designs.space`` expands a study's corners,
+``ureterfsi.designs.results`` writes the dataset variables.
 """
 from __future__ import annotations
 
@@ -40,9 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .config.errors import ConfigError
-from .config.reading import deep_merge, read_yaml
-from .config.schema import REPO_ROOT
+from ureterfsi.config.errors import ConfigError
+from ureterfsi.config.reading import deep_merge, read_yaml
+from ureterfsi import REPO_ROOT
 
 CORNER_MODES = ("auto", "all", "axes", "none")
 ALL_CORNERS_UP_TO = 3                  # varied parameters below which (inclusive) auto takes every corner

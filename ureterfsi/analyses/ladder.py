@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .checked_io import RUN_FILE, open_netcdf
-from .metadata import attach, ladder_variables
-from .provenance import provenance_attrs
+from ureterfsi.data.checked import RUN_FILE, open_netcdf
+from ureterfsi.data.cf import attach, ladder_variables
+from ureterfsi.data.provenance import provenance_attrs
 
 SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "stent_max_von_mises",
           "max_wall_displacement", "hole_flux")

@@ -1,20 +1,18 @@
-"""Figures of the design studies (ureterfsi.design_results datasets): each quantity against each parameter; for a
+"""Figures of the design studies (ureterfsi.designs.results datasets): each quantity against each parameter; for a
 full-factorial grid a map over two parameters; for a sample a sensitivity ranking: the Sobol' indices S1, ST
 of a Saltelli design, else the standardised regression coefficients (SRC_j = b_j s_xj / s_y of a linear
 least-squares fit)."""
 from __future__ import annotations
 
-import matplotlib
+import itertools
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import itertools  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
 
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-
-from .design_results import QUANTITIES, standardised_regression_coefficients  # noqa: E402
-from .designs import PARAMETERS, map_parameters  # noqa: E402
+from ureterfsi.designs.results import QUANTITIES, standardised_regression_coefficients
+from ureterfsi.designs.space import PARAMETERS, map_parameters
+from ureterfsi.plotting.style import styled
 
 
 def _parameters(ds: xr.Dataset) -> list:
@@ -29,6 +27,7 @@ def _flat(ds: xr.Dataset) -> xr.Dataset:
     return ds.drop_dims([d for d, n in ds.sizes.items() if n == 0]).stack(point=_parameters(ds))
 
 
+@styled
 def parameters_figure(ds: xr.Dataset):
     """Each scalar quantity (rows) against each parameter (columns), every point drawn."""
     params, flat = _parameters(ds), _flat(ds)
@@ -52,6 +51,7 @@ def _label(name: str) -> str:
     return name.replace("_", " ")
 
 
+@styled
 def map_figure(ds: xr.Dataset):
     """Each quantity (rows) as a map over the first two grid parameters with two or more values (x, y; cells
     centred on the design points, which are marked), one column per combination of the values of the other
@@ -87,9 +87,10 @@ def map_figure(ds: xr.Dataset):
     return fig
 
 
+@styled
 def sobol_figure(ds: xr.Dataset):
     """First-order and total Sobol' indices S1, ST of each quantity (panels) per parameter, bars with their 95 %
-    confidence intervals (ureterfsi.design_results.sobol_indices)."""
+    confidence intervals (ureterfsi.designs.results.sobol_indices)."""
     params = [str(p) for p in ds["parameter"].values]
     quantities = [str(q) for q in ds["quantity"].values if np.isfinite(ds["sobol_total"].sel(quantity=q).values).any()]
     n = max(len(quantities), 1)
@@ -107,6 +108,7 @@ def sobol_figure(ds: xr.Dataset):
     return fig
 
 
+@styled
 def sensitivity_figure(ds: xr.Dataset):
     """The Sobol' indices of a Saltelli design (sobol_figure); else the standardised regression coefficients of
     each quantity on the parameters (R^2 of the fit in the title)."""

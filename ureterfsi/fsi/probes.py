@@ -11,8 +11,7 @@ import ufl
 from dolfinx import fem, geometry
 from mpi4py import MPI
 
-from .fsi import physics
-from .tags import INLET, OUTLET
+from ureterfsi.fsi import physics
 
 
 def von_mises(sigma):
@@ -169,9 +168,9 @@ def assemble_scalar(form, comm) -> float:
     return float(comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM))
 
 
-def flux_volume_forms(pb) -> dict:
+def flux_volume_forms(pb, inlet: int, outlet: int) -> dict:
     """UFL forms, on the reference mesh of the problem `pb`, of the urine volume V = int_fluid J dX and the
-    volumetric flow rates through the open ends Q = int (v - w) . J F^-T N dA, w the BDF mesh velocity of
+    volumetric flow rates through the open ends (facet tags `inlet`, `outlet`) Q = int (v - w) . J F^-T N dA, w the BDF mesh velocity of
     the last accepted step: "fluid_volume", "outlet_flux" (positive out), "inlet_flux" (positive in)."""
     ops = pb.ops
     v, u = pb.split()["velocity"], pb.split()["displacement"]
@@ -179,12 +178,12 @@ def flux_volume_forms(pb) -> dict:
     J = ufl.det(F)
     n_da = J * ufl.inv(F).T * ops.normal()
     rel = ops.vec(v) - ops.vec(pb.split(pb.x_dot)["displacement"])
-    return {"outlet_flux": ufl.dot(rel, n_da) * ops.weight * pb.ds(OUTLET),
-            "inlet_flux": -ufl.dot(rel, n_da) * ops.weight * pb.ds(INLET),
+    return {"outlet_flux": ufl.dot(rel, n_da) * ops.weight * pb.ds(outlet),
+            "inlet_flux": -ufl.dot(rel, n_da) * ops.weight * pb.ds(inlet),
             "fluid_volume": J * ops.weight * pb.dx(tuple(pb.fluid_tags))}
 
 
-def end_face_pressure_forms(pb, inlet: int = INLET, outlet: int = OUTLET) -> dict:
+def end_face_pressure_forms(pb, inlet: int, outlet: int) -> dict:
     """UFL forms of the area-mean urine pressure on the open ends (facet tags `inlet`, `outlet`),
     p_face = int p |J F^-T N| dA / int |J F^-T N| dA (current area, ALE): "{inlet,outlet}_pressure_integral" and
     "{inlet,outlet}_area" (their ratio is the mean)."""

@@ -4,7 +4,7 @@
     "Procedure for estimation and reporting of uncertainty due to discretization in CFD applications",
     J. Fluids Eng. 130(7), 078001, doi:10.1115/1.2960953
 
-applied to the mesh-convergence dataset of the study (ureterfsi.aggregate.combine_levels, paper §3.1).
+applied to the mesh-convergence dataset of the study (ureterfsi.analyses.aggregate.combine_levels, paper §3.1).
 
 The procedure (Celik et al. 2008, steps 1-5), for a quantity phi computed on three grids numbered fine to
 coarse, 1 (finest), 2, 3:
@@ -59,17 +59,16 @@ r32 enter the GCI).
 """
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import xarray as xr
 
-from .checked_io import Contract, read_json
-from .metadata import at_z, attach, cf_attrs, cf_meta, gci_quantity_variables, gci_variables
-from .provenance import atomic_path, provenance_attrs
+from ureterfsi.data.checked import Contract, read_json
+from ureterfsi.data.cf import at_z, attach, cf_attrs, cf_meta, gci_quantity_variables, gci_variables
+from ureterfsi.data.provenance import provenance_attrs
+from ureterfsi.data.tables import write_table
 
 # what the readers of a GCI dataset (table_gci) rely on
 GCI_DATASET = Contract("GCI dataset", attrs=("fine_level", "medium_level", "coarse_level", "safety_factor"),
@@ -238,7 +237,7 @@ def three_grid_gci(h, phi, safety_factor: float = SAFETY_FACTOR) -> GCIResult:
 
 # ------------------------------------------------------------------------------------------- datasets
 def mesh_measure(sidecar) -> tuple[float, int]:
-    """(total analytic measure, dimension) of a mesh from its JSON sidecar (ureterfsi.mesh): the volume of
+    """(total analytic measure, dimension) of a mesh from its JSON sidecar (ureterfsi.mesh.build): the volume of
     a 3D mesh (m3, d = 3) or the area of an axisymmetric r-z mesh (m2, d = 2). The analytic measure is the
     same for every mesh level, as h = (V/N)^(1/d) wants."""
     info = read_json(sidecar, SIDECAR)
@@ -268,7 +267,7 @@ def extrapolated_values(ds: xr.Dataset) -> np.ndarray:
 
 def gci_dataset(conv: xr.Dataset, points_z=DEFAULT_POINTS_Z, scalars=DEFAULT_SCALARS, measure: float | None = None,
                 dim: int = 3, safety_factor: float = SAFETY_FACTOR, cfg: dict | None = None) -> xr.Dataset:
-    """GCI of the mesh-convergence dataset (ureterfsi.aggregate.combine_levels) for the per-level scalars
+    """GCI of the mesh-convergence dataset (ureterfsi.analyses.aggregate.combine_levels) for the per-level scalars
     `scalars` (those present) and the stent probe-line von Mises stress at the axial positions points_z (m,
     linear interpolation along the line).
 
@@ -415,36 +414,30 @@ def gci_table(ds: xr.Dataset) -> list[dict]:
 def write_gci_table(ds: xr.Dataset, csv_path=None, md_path=None) -> list[dict]:
     """The GCI table as CSV (SI units, full precision) and Markdown (kPa, mm³/s, percentages), atomically."""
     rows = gci_table(ds)
-    if csv_path:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
-        with atomic_path(csv_path) as tmp:
-            tmp.write_text(buf.getvalue())
+    header, md_rows, footer = None, None, ()
     if md_path:
         fine, medium, coarse = ds.attrs["fine_level"], ds.attrs["medium_level"], ds.attrs["coarse_level"]
         cells = {lv: int(ds["cells"].sel(level=lv)) for lv in (fine, medium, coarse)}
         head = ["Quantity", "Units", f"φ1 ({fine})", f"φ2 ({medium})", f"φ3 ({coarse})", "p", "φ_ext21",
                 "e_a21", "e_ext21", "GCI_fine21", "GCI32", "GCI32/(r21^p GCI21)", "Convergence"]
-        lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
+        md_rows = []
         for i, r in enumerate(rows):
             unit, scale = _DISPLAY.get(r["units"], (r["units"], 1.0))
             z = float(ds["probe_z"].isel(quantity=i))
             label = (f"stent von Mises stress at z = {z * 1e3:g} mm" if np.isfinite(z)
                      else _LABELS.get(r["quantity"], r["quantity"].replace("_", " ")))
             phis = [r[k] for k in rows[0] if k.startswith("phi") and k != "phi_ext21"]
-            lines.append("| " + " | ".join(
+            md_rows.append(
                 [label, unit] + [_g(v * scale) for v in phis]
                 + [_g(r["apparent_order"], 3), _g(r["phi_ext21"] * scale), _pct(r["e_a21"]), _pct(r["e_ext21"]),
-                   _pct(r["gci_fine21"]), _pct(r["gci32"]), _g(r["asymptotic_ratio"], 3), r["diagnosis"]]) + " |")
+                   _pct(r["gci_fine21"]), _pct(r["gci32"]), _g(r["asymptotic_ratio"], 3), r["diagnosis"]])
         hs = ""
         if ds["h"].attrs.get("units") == "m":
             hs = ", ".join(f"{float(ds['h'].sel(level=lv)) * 1e3:.4g}" for lv in (fine, medium, coarse))
             hs = f"h = {hs} mm; "
-        lines += ["", f"Cells: {fine} {cells[fine]}, {medium} {cells[medium]}, {coarse} {cells[coarse]}; {hs}"
-                      f"r21 = {float(ds['r21']):.4g}, r32 = {float(ds['r32']):.4g}; "
-                      f"safety factor Fs = {ds.attrs['safety_factor']:g}."]
-        with atomic_path(md_path) as tmp:
-            tmp.write_text("\n".join(lines) + "\n")
+        header = head
+        footer = [f"Cells: {fine} {cells[fine]}, {medium} {cells[medium]}, {coarse} {cells[coarse]}; {hs}"
+                  f"r21 = {float(ds['r21']):.4g}, r32 = {float(ds['r32']):.4g}; "
+                  f"safety factor Fs = {ds.attrs['safety_factor']:g}."]
+    write_table(rows, csv_path, md_path, header=header, md_rows=md_rows, footer=footer)
     return rows

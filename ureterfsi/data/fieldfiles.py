@@ -1,7 +1,7 @@
-"""Reading the run's field files (ureterfsi.fields: XDMF 3 + HDF5) without dolfinx, for figures and checks.
+"""Reading the run's field files (ureterfsi.study.fields: XDMF 3 + HDF5) without dolfinx, for figures and checks.
 
-HDF5 is read through netCDF4 (HDF5 files are netCDF-4 readable), so no second HDF5 binding is loaded. matplotlib
-is imported by the two figure functions only: reading and sampling fields need none.
+HDF5 is read through netCDF4 (HDF5 files are netCDF-4 readable), so no second HDF5 binding is loaded. The figures
+drawn from them: ureterfsi.plotting.fields.
 """
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ import netCDF4
 import numpy as np
 from scipy.spatial import cKDTree
 
-from . import tags
-from .checked_io import BadFile, Contract, read_json
+from ureterfsi.mesh import tags
+from ureterfsi.data.checked import BadFile, Contract, read_json
 
-# the index of a run's field files (ureterfsi.fields) as the readers here use it
+# the index of a run's field files (ureterfsi.study.fields) as the readers here use it
 FIELDS_INDEX = Contract("field-files index", attrs=("parts", "units"), versioned=False)
 
 
@@ -162,39 +162,6 @@ def hole_flow_section(fs: FieldSet, times, hole_z: float, geom, half_width: floa
     return Section(y, z, [float(t) for t in times], vals)
 
 
-def fig_hole_flow(sec: Section, hole_z: float, geom, title: str):
-    """The Section of hole_flow_section: urine speed |v| (colour, one scale for every instant) and streamlines
-    of the in-plane velocity (v_y, v_z); the stent wall (grey) with the hole, and the ureter inner wall at rest
-    (dashed) outlined."""
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Rectangle
-
-    fig, axes = plt.subplots(1, len(sec.times), figsize=(3.2 * len(sec.times) + 1.0, 4.2), sharey=True,
-                             constrained_layout=True)
-    axes = np.atleast_1d(axes)
-    vmax = max(float(np.nanmax(np.linalg.norm(v, axis=2))) for v in sec.values) * 1e3
-    zmm, ymm = sec.z * 1e3, sec.y * 1e3
-    ri, ro, rh = geom.stent_inner_radius * 1e3, geom.stent_outer_radius * 1e3, geom.hole_radius * 1e3
-    zl, zh = zmm[0], zmm[-1]
-    for ax, t, v in zip(axes, sec.times, sec.values):
-        speed = np.linalg.norm(v, axis=2) * 1e3
-        im = ax.pcolormesh(zmm, ymm, speed, shading="auto", cmap="viridis", vmin=0.0, vmax=vmax)
-        vy, vz = np.ma.masked_invalid(v[..., 1]), np.ma.masked_invalid(v[..., 2])
-        ax.streamplot(zmm, ymm, vz, vy, color="w", density=1.1, linewidth=0.6, arrowsize=0.7)
-        for a, b in ((zl, hole_z * 1e3 - rh), (hole_z * 1e3 + rh, zh)):
-            ax.add_patch(Rectangle((a, ri), b - a, ro - ri, facecolor="0.6", edgecolor="k", lw=0.8))
-        ax.axhline(geom.ureter_inner_radius * 1e3, color="k", ls="--", lw=0.8)
-        ax.set_title(f"t = {t:g} s")
-        ax.set_xlabel("z (mm)")
-        ax.set_xlim(zl, zh)
-        ax.set_ylim(ymm[0], ymm[-1])
-        ax.set_facecolor("0.85")
-    axes[0].set_ylabel("y (mm), plane x = 0")
-    fig.colorbar(im, ax=axes, label="urine speed |v| (mm s$^{-1}$)")
-    fig.suptitle(title)
-    return fig
-
-
 def pressure_lines(fs: FieldSet, times, geom, n: int = 300) -> dict:
     """Urine pressure (Pa) along z at each of `times` on two lines of the plane y = 0 (reference
     configuration, which the ALE mesh keeps on the moving wall): the ureter inner wall r = R_i and the stent
@@ -206,22 +173,3 @@ def pressure_lines(fs: FieldSet, times, geom, n: int = 300) -> dict:
     return {label: (z, np.array([sample(fs, "pressure", t, np.c_[np.full_like(z, r), np.zeros_like(z), z],
                                         cells=urine)[:, 0] for t in times]))
             for label, r in radii.items()}
-
-
-def fig_pressure_along(lines: dict, times, p_ref: float, pulse_centres, title: str):
-    """The lines of pressure_lines, p - p_ref, one panel per line and one curve per time; the pulse centre
-    at each time marked (dotted)."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(len(lines), 1, figsize=(7.0, 5.5), sharex=True, constrained_layout=True)
-    for ax, (label, (z, p)) in zip(axes, lines.items()):
-        for k, t in enumerate(times):
-            (line,) = ax.plot(z * 1e3, p[k] - p_ref, label=f"t = {t:g} s")
-            ax.axvline(pulse_centres[k] * 1e3, color=line.get_color(), ls=":", lw=0.8)
-        ax.set_ylabel(f"p - p_ref (Pa)\n{label}")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel("z (mm), inlet (kidney) 0 to outlet (bladder)")
-    axes[-1].set_xlim(0.0, z[-1] * 1e3)
-    fig.suptitle(title)
-    return fig

@@ -1,15 +1,13 @@
-"""Figures of the fidelity ladder (ureterfsi.ladder): the speed-accuracy trade of its rungs and their figure
+"""Figures of the fidelity ladder (ureterfsi.analyses.ladder): the speed-accuracy trade of its rungs and their figure
 quantities over each other."""
 from __future__ import annotations
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-
-from .ladder import common_holes  # noqa: E402
+from ureterfsi.analyses.ladder import common_holes
+from ureterfsi.plotting.style import styled
 
 LADDER_OVERLAY = {"outlet_flux": "outlet flow (Fig. 4)", "inlet_flux": "inlet flow",
                   "hole_flux": "side-hole flow (Fig. 11)", "stent_max_von_mises": "stent's largest von Mises (Fig. 10)",
@@ -17,6 +15,7 @@ LADDER_OVERLAY = {"outlet_flux": "outlet flow (Fig. 4)", "inlet_flux": "inlet fl
                   "wall_radial_displacement": "wall's radial displacement (Fig. 5)"}
 
 
+@styled
 def ladder_overlay(runs: dict, reference: str):
     """The figure quantities of every rung of the ladder over each other (`runs`: rung -> run dataset): the time
     series, the side hole whose flow is largest in the `reference` run (matched by position in the others), and the
@@ -54,9 +53,10 @@ def ladder_overlay(runs: dict, reference: str):
     return fig
 
 
+@styled
 def ladder_pareto(ds: xr.Dataset):
     """Speed-accuracy trade of the fidelity ladder: wall time of each rung against its error for every
-    quantity (ureterfsi.ladder); the reference rung (error 0) is drawn on the lower axis limit."""
+    quantity (ureterfsi.analyses.ladder); the reference rung (error 0) is drawn on the lower axis limit."""
     fig, ax = plt.subplots(figsize=(9.5, 4.8))
     errors = ds["error"].values
     positive = errors[np.isfinite(errors) & (errors > 0)]

@@ -22,7 +22,7 @@ the exact plane-strain inflation of the wall tube gives ~1 mm. This module
 Only the config sections `geometry`, `ureter`, `peristalsis` and `time` are read (the workflow rule
 `calibration` passes just these).
 
-    python -m ureterfsi.calibration [config.yaml [overlay.yaml ...]] [--json PATH] [--no-transient]
+    python -m ureterfsi.study.calibration [config.yaml [overlay.yaml ...]] [--json PATH] [--no-transient]
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ from scipy.optimize import brentq
 
 from ureterfsi.config import DEFAULT_CONFIG, load_config_files
 from ureterfsi.fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings
-from ureterfsi.provenance import provenance_attrs, write_json
+from ureterfsi.data.provenance import provenance_attrs, write_json
 from ureterfsi.scenes.wall_rz import WallModel, wall_material, wall_radii
 from ureterfsi.scenes.verification import mooney_rivlin_tube_pressure
 
@@ -336,7 +336,7 @@ def write_report(cfg, path, **kwargs) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m ureterfsi.calibration", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m ureterfsi.study.calibration", description=__doc__.split("\n")[0])
     ap.add_argument("configs", nargs="*", default=[str(DEFAULT_CONFIG)])
     ap.add_argument("--json", help="write the report as JSON (atomically)")
     ap.add_argument("--cells-through-wall", type=int, default=4)

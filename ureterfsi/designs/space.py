@@ -20,7 +20,7 @@ A point's mesh symmetry follows from its parameters (``UreterGeometry.symmetry``
 mirror planes hold (aligned or rotated hole pairs), the half model y >= 0 for a stent offset along x
 (``stent_eccentricity``); a stent-free base model run axisymmetric stays axisymmetric.
 
-Results (``ureterfsi.design_results.study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
+Results (``ureterfsi.designs.results.study_dataset``): the scalars of every point (peak and mean outlet flow, backflow volume, flow
 through each side hole, the share of the outlet flow exchanged through the holes, the share of the outlet flow
 inside the stent lumen, peak stent von Mises stress, peak wall displacement, the pressure drop p_in - p_out between
 the end faces: its peak |.| and its mean) and the time series behind them, on one dimension per parameter for a full
@@ -30,7 +30,7 @@ Saltelli design adds the point of each sample row (``saltelli_point``: rows repe
 each point runs once) and the first-order and total Sobol' indices of each quantity with their confidence intervals
 (``design_results.sobol_indices``, SALib.analyze.sobol).
 
-Trust at every point (``ureterfsi.rung_check``): a study on a rung cheaper than fully coupled is checked at the corners
+Trust at every point (``ureterfsi.designs.rung_check``): a study on a rung cheaper than fully coupled is checked at the corners
 of its design space (``expand_rung_check``: each corner a Point on the 10 mm segment, solved on the study's rung and
 fully coupled; ``design_results.rung_check_dataset``: the rung error per corner and quantity), and its dataset says per point
 whether it lies in the checked region with every corner within the tolerance.
@@ -49,12 +49,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config.checks import check_config
-from .config.errors import ConfigError, fmt
-from .config.runs import wall_sections
-from .geometry import UreterGeometry
-from .metadata import DESIGN_PARAMETERS, cf_meta
-from . import rung_check as rc
+from ureterfsi.config.checks import check_config
+from ureterfsi.config.errors import ConfigError, fmt
+from ureterfsi.config.sections import mesh_sections, run_sections, wall_sections
+from ureterfsi.mesh.geometry import UreterGeometry
+from ureterfsi.data.cf import DESIGN_PARAMETERS, cf_meta
+from ureterfsi.designs import rung_check as rc
 
 FRENCH = 1.0e-3 / 3.0                  # m, 1 Fr = 1/3 mm
 FRENCH_RANGE = (4.8, 8.0)              # Fr, the clinical range of ureteral stent sizes
@@ -78,7 +78,7 @@ class Parameter:
         return cf_meta(self.name, DESIGN_PARAMETERS)[1]
 
 
-# the parameters (units and long_name: ureterfsi.metadata.DESIGN_PARAMETERS) and what each re-runs;
+# the parameters (units and long_name: ureterfsi.data.cf.DESIGN_PARAMETERS) and what each re-runs;
 # stricture_* (geometry.stricture_*): a new wall motion and a new mesh; hole_pair_rotation
 # (geometry.hole_arrangement, 0 = aligned, 90 = rotated_90) and stent_eccentricity (geometry.stent_offset): a new mesh
 PARAMETERS = {name: Parameter(name, part) for name, part in (
@@ -120,7 +120,7 @@ class Point:
 @dataclass
 class RungCheck:
     """The study's rung checked against the fully coupled model at the corners of its design space
-    (ureterfsi.rung_check)."""
+    (ureterfsi.designs.rung_check)."""
     mode: str                          # all | axes (auto resolved)
     tolerance: float
     segment: str                       # the segment overlay's path, as configured
@@ -198,7 +198,7 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
     """The base configuration with a point's overrides (without `design_studies`, unvalidated).
 
     The stent keeps its outer diameter when its wall thickness changes (inner = outer - 2 t); a pair spacing s
-    gives floor(L/s) + 1 pairs at clip(k s, c, L - c) (Table 1 rule, ureterfsi.geometry.hole_pair_positions);
+    gives floor(L/s) + 1 pairs at clip(k s, c, L - c) (Table 1 rule, ureterfsi.mesh.geometry.hole_pair_positions);
     the wall stiffness scale multiplies c10, c01, c20, c02, c11 (kappa fixed, as the calibration does)."""
     out = copy.deepcopy({k: v for k, v in cfg.items() if k != "design_studies"})
     g, base = out["geometry"], base_values(cfg, model)
@@ -231,20 +231,8 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
 
 def point_symmetry(cfg: dict, base_symmetry: str) -> str:
     """A design point's mesh symmetry: axisymmetric if its base model runs so (no stent), else the smallest model
-    its mirror planes allow (ureterfsi.geometry.UreterGeometry.symmetry)."""
+    its mirror planes allow (ureterfsi.mesh.geometry.UreterGeometry.symmetry)."""
     return base_symmetry if base_symmetry == "axisymmetric" else UreterGeometry.from_config(cfg).symmetry
-
-
-def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:
-    """The configuration entering a mesh (rule mesh's rerun trigger) with its level and symmetry."""
-    return {"geometry": cfg["geometry"], "mesh": cfg["mesh"], "model": cfg["models"][model],
-            "level": level, "symmetry": symmetry}
-
-
-def solve_sections(cfg: dict, model: str) -> dict:
-    """The configuration entering one solve (rule solve's rerun trigger)."""
-    keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver")
-    return {k: cfg[k] for k in keys} | {"model": cfg["models"][model]}
 
 
 # ------------------------------------------------------------------------------------------ expansion
@@ -413,7 +401,7 @@ def _space(spec: dict, names: list, all_values: list) -> tuple[dict, dict]:
 
 
 def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungCheck | None:
-    """The corners of study `name` (ureterfsi.rung_check), each a Point on the segment with its configuration,
+    """The corners of study `name` (ureterfsi.designs.rung_check), each a Point on the segment with its configuration,
     mesh and wall; None if the study is not checked. A corner on a study that runs on the segment is one of its
     points when the grid holds it (`reuses`: its rung run is the point's). ConfigError (one line) for a corner that
     cannot be posed on the segment."""
@@ -453,7 +441,7 @@ def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungChe
         check.corners.append(corner)
         same = next((p for p in study.points if p.id == cid), None)
         if same is not None and (same.mesh_id, same.symmetry) == (corner.mesh_id, corner.symmetry) and \
-                solve_sections(same.config, study.model) == solve_sections(ccfg, study.model):
+                run_sections(same.config, study.model) == run_sections(ccfg, study.model):
             check.reuses[cid] = same.id
     return check
 

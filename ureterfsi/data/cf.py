@@ -7,7 +7,7 @@ Imports no dolfinx, PETSc or MPI: post-processing and figures use it without the
 CF 1.8: coordinate variables carry no `_FillValue` (§2.5.1); integers are written as int32 (§2.2 has no
 int64 in the classic data types the checkers accept); the `time` axis is a CF time coordinate (§4.4):
 standard_name "time", units "s since <EPOCH>" and a calendar, the epoch standing for the start of the run
-(t = 0). Readers open with decode_times=False (ureterfsi.checked_io.open_netcdf), so time stays in seconds.
+(t = 0). Readers open with decode_times=False (ureterfsi.data.checked.open_netcdf), so time stays in seconds.
 Dimensions are in the order CF §2.4 recommends, `time` right of every other dimension: the producers build
 their arrays so and write_netcdf refuses any other order.
 """
@@ -20,7 +20,7 @@ from importlib.metadata import version
 
 import numpy as np
 
-from .provenance import atomic_path
+from ureterfsi.data.provenance import atomic_path
 
 CONVENTIONS = "CF-1.8"
 INSTITUTION = "ureterfsi project (open reproduction)"
@@ -29,7 +29,7 @@ REFERENCES = ("Numerical study of fully coupled fluid-structure interaction of s
               "stent side-holes (the study reproduced; text in shared/paper/stented-ureter-fsi.txt)")
 
 # name -> (units, long_name) of the run files (ureterfsi.study, ureterfsi.study.oneway), the study datasets
-# (ureterfsi.aggregate) and the stability matrix (ureterfsi.stability)
+# (ureterfsi.analyses.aggregate) and the stability matrix (ureterfsi.stability)
 VARIABLES = {
     "time": ("s since 2000-01-01 00:00:00", "simulated time from the start of the run (the epoch is t = 0)"),
     "outlet_flux": ("m3 s-1", "volumetric flow rate through the outlet (bladder side), positive out of the ureter"),
@@ -158,7 +158,7 @@ VARIABLES = {
     "hole_elements_measured": ("1", "hole diameter / mean edge length of the hole-wall triangles of the mesh "
                                "(NaN: no holes)"),
     "is_baseline": ("1", "1 for the baseline of the case's scene (r-z: baseline; 3D: the study's own mesh)"),
-    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.hole_channels)"),
+    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.build.hole_channels)"),
     "mesh_min_quality": ("1", "smallest signed inverse condition number (gmsh minSICN) of the mesh cells"),
     "bulk_ratio": ("1", "kappa / (C10 + C01) of the ureter wall"),
     "density_ratio": ("1", "ureter wall density / urine density"),
@@ -185,13 +185,13 @@ VARIABLES = {
 }
 
 # the tables of the other datasets, each in its own words (a name may mean another thing elsewhere)
-# XDMF field attributes and fields.json (ureterfsi.fields): quantity -> (units, long_name)
+# XDMF field attributes and fields.json (ureterfsi.study.fields): quantity -> (units, long_name)
 FIELD_VARIABLES = {
     "velocity": ("m s-1", "urine velocity (solid velocity in the ureter wall and the stent)"),
     "pressure": ("Pa", "urine pressure"),
     "displacement": ("m", "displacement: solid in the ureter wall and the stent, ALE mesh displacement in the urine"),
     "von_mises": ("Pa", "stent von Mises stress, cell mean"),
-    "subdomain": ("1", "cell tag of the subdomain (ureterfsi.tags: urine 1, ureter wall 2, stent 3)"),
+    "subdomain": ("1", "cell tag of the subdomain (ureterfsi.mesh.tags: urine 1, ureter wall 2, stent 3)"),
     "time": ("s", "simulated time of the snapshot"),
 }
 # the one-way rung's wall-motion file (ureterfsi.study.oneway.WallHistory)
@@ -205,7 +205,7 @@ WALL_MOTION_VARIABLES = {
     "z_inner": ("m", "axial position on the inner wall surface (reference)"),
     "z_outer": ("m", "axial position on the outer wall surface (reference)"),
 }
-# design-study parameters (ureterfsi.designs.PARAMETERS), SI units
+# design-study parameters (ureterfsi.designs.space.PARAMETERS), SI units
 DESIGN_PARAMETERS = {
     "hole_diameter": ("m", "side-hole diameter"),
     "hole_pair_spacing": ("m", "distance between side-hole pairs (count by the Table 1 rule)"),
@@ -221,7 +221,7 @@ DESIGN_PARAMETERS = {
     "hole_pair_rotation": ("degree", "angle between the axes of successive side-hole pairs"),
     "stent_eccentricity": ("m", "offset of the stent axis from the ureter axis, along x"),
 }
-# the rung check of a design study at the corners of its design space (ureterfsi.rung_check); the corners'
+# the rung check of a design study at the corners of its design space (ureterfsi.designs.rung_check); the corners'
 # parameter coordinates come from rung_check_metadata
 RUNG_CHECK_VARIABLES = {
     "corner": ("1", "id of a corner of the design space (hash of its parameter values) where the study's rung is "
@@ -247,7 +247,7 @@ def rung_check_metadata(parameters) -> dict:
                                    for p in parameters}
 
 
-# the GCI dataset (ureterfsi.gci); the templated entries come from gci_variables
+# the GCI dataset (ureterfsi.analyses.gci); the templated entries come from gci_variables
 GCI_VARIABLES = {
     "cells": VARIABLES["cells"],
     "apparent_order": ("1", "apparent order p of Celik et al. 2008 (NaN: undefined, see note)"),
@@ -263,7 +263,7 @@ GCI_VARIABLES = {
     "quantity": ("1", "quantity of the GCI"),
     "level": VARIABLES["level"],
 }
-# the fidelity-ladder dataset (ureterfsi.ladder); the templated entries come from ladder_variables
+# the fidelity-ladder dataset (ureterfsi.analyses.ladder); the templated entries come from ladder_variables
 LADDER_VARIABLES = {
     "pairwise_error": ("1", "relative max-norm error of a rung against another (e.g. the quarter model against "
                             "the full one)"),
@@ -333,7 +333,7 @@ def cf_meta(name: str, table: dict | None = None) -> tuple[str, str]:
     try:
         return (VARIABLES if table is None else table)[name]
     except KeyError:
-        where = " (ureterfsi.metadata.VARIABLES)" if table is None else ""
+        where = " (ureterfsi.data.cf.VARIABLES)" if table is None else ""
         raise KeyError(f"no CF metadata for variable {name!r}{where}") from None
 
 

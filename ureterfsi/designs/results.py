@@ -1,6 +1,6 @@
-"""The results of a design study (ureterfsi.designs): each point's scalars from its run (peak and mean outlet flow,
+"""The results of a design study (ureterfsi.designs.space): each point's scalars from its run (peak and mean outlet flow,
 backflow volume, hole exchange, stent lumen share, peak stent stress, wall displacement and pressure drop), the rung
-check's dataset at the corners of the design space (the rung error per corner and quantity, ureterfsi.rung_check),
+check's dataset at the corners of the design space (the rung error per corner and quantity, ureterfsi.designs.rung_check),
 the study's dataset (every point's parameters and scalars, per-point trust from the rung check) and its sensitivity
 measures (standardised regression coefficients; first-order and total Sobol' indices, SALib.analyze.sobol).
 """
@@ -11,12 +11,12 @@ import json
 import numpy as np
 import xarray as xr
 
-from . import rung_check as rc
-from .checked_io import Contract, open_netcdf
-from .designs import Study, base_values, point_id, studies
-from .geometry import SYMMETRY_FRACTION
-from .metadata import DESIGN_PARAMETERS, VARIABLES, rung_check_metadata
-from .provenance import provenance_attrs
+from ureterfsi.designs import rung_check as rc
+from ureterfsi.data.checked import Contract, open_netcdf
+from ureterfsi.designs.space import Study, base_values, point_id, studies
+from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
+from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, rung_check_metadata
+from ureterfsi.data.provenance import provenance_attrs
 
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
@@ -102,7 +102,7 @@ def mesh_motion_variables(points, runs) -> dict:
 # checked_io.RUN_FILE, of which it reads these)
 DESIGN_RUN = Contract("run file", variables=("time", "outlet_flux", "max_wall_displacement", "min_ale_jacobian"),
                       units=VARIABLES)
-# what the design figures (ureterfsi.plotting_designs, workflow/scripts/design_figures.py) rely on in a study's dataset
+# what the design figures (ureterfsi.plotting.designs, workflow/scripts/design_figures.py) rely on in a study's dataset
 DESIGN_DATASET = Contract("design-study dataset", attrs=("study", "design_kind", "model", "points"))
 # what study_dataset takes from a study's rung check (rung_check_dataset)
 RUNG_CHECK = Contract("rung check", attrs=("rung_check",),
@@ -150,14 +150,14 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed
 def write_failed_corner(cfg: dict, path, rung: str, message: str) -> None:
     """The run file of a corner whose solve on `rung` failed: no data, the failure in its attribute solve_failed
     (rung_check_dataset reports the corner as not checked)."""
-    from .metadata import write_netcdf
+    from ureterfsi.data.cf import write_netcdf
 
     ds = xr.Dataset(attrs=provenance_attrs(cfg, rung=rung, solve_failed=message))
     write_netcdf(ds, path, title=f"ureterfsi rung-check corner: the {rung} solve failed")
 
 
 def error_scales(run) -> dict:
-    """The scales of the outlet-flow scalars of a (fully coupled) run for their rung errors (ureterfsi.rung_check):
+    """The scales of the outlet-flow scalars of a (fully coupled) run for their rung errors (ureterfsi.designs.rung_check):
     max |Q_out| for the peak and the mean outlet flow, integral |Q_out| dt for the backflow volume."""
     t, q = run["time"].values.astype(float), run["outlet_flux"].values.astype(float)
     peak = float(np.max(np.abs(q)))
@@ -165,11 +165,11 @@ def error_scales(run) -> dict:
 
 
 def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
-    """The rung check of study `name` (ureterfsi.rung_check) from its corners' run files {corner id: (run on the
+    """The rung check of study `name` (ureterfsi.designs.rung_check) from its corners' run files {corner id: (run on the
     study's rung, fully coupled run)}: per corner and quantity the relative error, its maximum over the corners,
     the tolerance, per corner whether it is within it and both solves' wall times, the corners' parameter values;
     the attribute rung_check says what was checked and what is outside (rung_check_summary). CF-annotated
-    (ureterfsi.metadata.rung_check_metadata)."""
+    (ureterfsi.data.cf.rung_check_metadata)."""
     st = studies(cfg)[name]
     ch = st.check
     if ch is None:
@@ -239,7 +239,7 @@ def _rung_check_part(st: Study, check) -> tuple[xr.Dataset | None, dict, np.ndar
 def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = None):
     """Dataset of a study from its run files {point id: path} and, for a checked study, its rung check
     (rung_check_dataset), whose variables and attributes it takes, with per point whether it lies in the checked
-    region and whether it is trusted there (see the module docstring and ureterfsi.rung_check)."""
+    region and whether it is trusted there (see the module docstring and ureterfsi.designs.rung_check)."""
     st = studies(cfg)[name]
     runs = {p.id: open_netcdf(paths[p.id], DESIGN_RUN) for p in st.points}
     tc = cfg["time"]

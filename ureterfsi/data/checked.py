@@ -11,11 +11,10 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import netCDF4  # noqa: F401  (before xarray/dolfinx: see ureterfsi/__init__.py)
 import xarray as xr
 
-from .metadata import VARIABLES
-from .provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
+from ureterfsi.data.cf import VARIABLES
+from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 _NETCDF_MAGIC = (b"\x89HDF\r\n\x1a\n", b"CDF\x01", b"CDF\x02", b"CDF\x05")
 
@@ -34,7 +33,7 @@ class BadFile(ValueError):
 @dataclass(frozen=True)
 class Contract:
     """What a reader relies on in a file: its kind (for messages), attributes and variables, and the table of
-    units its writer attaches (ureterfsi.metadata: name -> (units, long_name)); every variable of `variables`
+    units its writer attaches (ureterfsi.data.cf: name -> (units, long_name)); every variable of `variables`
     that the table names must carry those units (a run file converted to ml/s or ms is refused)."""
     kind: str
     attrs: tuple = ()
@@ -43,7 +42,7 @@ class Contract:
     versioned: bool = True     # carries the file-format version (provenance_attrs); fields.json does not
 
 
-# what the readers of a mesh's JSON sidecar (ureterfsi.mesh.build_mesh) rely on
+# what the readers of a mesh's JSON sidecar (ureterfsi.mesh.build.build_mesh) rely on
 MESH_SIDECAR = Contract("mesh sidecar", attrs=("model", "level", "symmetry", "cells", "cells_total", "measure",
                                                "subdomain_measure", "hole_pair_z"))
 
@@ -74,7 +73,7 @@ def _check_version(path, version, kind: str, written_by=None) -> None:
 
 def open_netcdf(path, contract: Contract) -> xr.Dataset:
     """The dataset at `path`, loaded into memory (the file is closed), checked against `contract`. Times are
-    not decoded: `time` (units "s since <epoch>", ureterfsi.metadata) stays in seconds from the run's start."""
+    not decoded: `time` (units "s since <epoch>", ureterfsi.data.cf) stays in seconds from the run's start."""
     path = Path(path)
     _check_exists(path, contract.kind)
     with open(path, "rb") as fh:
@@ -138,7 +137,7 @@ def check_msh(path) -> None:
         raise BadFile(path, f"not a gmsh mesh (first line {lines[0][:40]!r}, expected '$MeshFormat')")
     version = lines[1].split()[0] if len(lines) > 1 and lines[1].split() else b"?"
     if not version.startswith(b"4"):
-        raise BadFile(path, f"gmsh mesh format {version.decode(errors='replace')}, expected 4.1 (ureterfsi.mesh)")
+        raise BadFile(path, f"gmsh mesh format {version.decode(errors='replace')}, expected 4.1 (ureterfsi.mesh.build)")
     last = tail.rstrip().rsplit(b"\n", 1)[-1].strip()
     if not last.startswith(b"$End"):
         raise BadFile(path, "truncated gmsh mesh (does not end with a closing '$End...' section tag)")
@@ -159,7 +158,7 @@ def sha256_file(path, chunk: int = 1 << 20, kind: str = "file") -> str:
     return h.hexdigest()
 
 
-# what the readers of a run file (ureterfsi.aggregate, ureterfsi.ladder) rely on; the stent variables
+# what the readers of a run file (ureterfsi.analyses.aggregate, ureterfsi.analyses.ladder) rely on; the stent variables
 # exist only in stented runs
 RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity", "wall_time_s"),
                     variables=("time", "z", "probe_time", "outlet_flux", "inlet_flux", "outlet_mean_axial_velocity",

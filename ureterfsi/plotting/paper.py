@@ -2,60 +2,31 @@
 
 One function per figure; each returns a matplotlib Figure (Agg backend) in readable scaled units
 (mm, kPa, mm/s, mm^3/s). Models are named as in Table 1 through the `model_label` coordinate.
-`save_figure` writes a figure in several formats atomically.
+Saved by ureterfsi.plotting.style.save_figure.
 """
 from __future__ import annotations
 
-import csv
-import io
-import os
-import tempfile
-from pathlib import Path
-
 import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.collections import PolyCollection
+from matplotlib.patches import Patch
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
-from matplotlib.patches import Patch  # noqa: E402
+from ureterfsi.data.checked import Contract, read_json
+from ureterfsi.data.tables import write_table
+from ureterfsi.mesh import tags
+from ureterfsi.mesh.io import read_msh
+from ureterfsi.plotting.style import styled
+from ureterfsi.stability import AXES, AXIS_PARAMETER, format_value
 
-from . import tags  # noqa: E402
-from .checked_io import Contract, read_json  # noqa: E402
-from .meshfile import read_msh  # noqa: E402
-from .provenance import atomic_path  # noqa: E402
-from .stability import AXES, AXIS_PARAMETER, format_value  # noqa: E402
-
-# Paper defaults of the figure instants; the workflow takes them from the config (figures.wave_times,
-# figures.hole_velocity_times) through wave_times() and hole_figures().
-# paper §3.4: the pulse is at the top, middle, bottom of the segment and at/past the outlet
+# paper §3.4: the instants of Fig. 5 (the workflow passes figures.wave_times): the pulse at the top, middle, bottom
+# of the segment and at/past the outlet
 WAVE_TIMES = (0.5, 1.0, 2.0, 2.5)
-HOLE_FIGURE_STEMS = ("fig06", "fig07", "fig08", "fig09")
-HOLE_FIGURES = dict(zip(HOLE_FIGURE_STEMS, (0.5, 1.0, 2.0, 2.5)))
-
-
-def wave_times(cfg: dict | None = None) -> tuple:
-    """Instants of Fig. 5: figures.wave_times of the config, else the paper's."""
-    return tuple(float(t) for t in ((cfg or {}).get("figures", {}).get("wave_times") or WAVE_TIMES))
-
-
-def hole_figures(cfg: dict | None = None) -> dict:
-    """{"fig06": t, ..., "fig09": t}: figures.hole_velocity_times of the config (in order), else the paper's."""
-    times = (cfg or {}).get("figures", {}).get("hole_velocity_times")
-    if times is None:
-        return dict(HOLE_FIGURES)
-    if len(times) != len(HOLE_FIGURE_STEMS):
-        raise ValueError(f"figures.hole_velocity_times needs {len(HOLE_FIGURE_STEMS)} entries (Figs. 6-9), "
-                         f"got {list(times)}")
-    return {stem: float(t) for stem, t in zip(HOLE_FIGURE_STEMS, times)}
 MODEL_COLORS = {"1": "0.2", "2": "tab:blue", "3": "tab:orange", "4": "tab:green"}
 MODEL_STYLES = {"1": "-", "2": "-", "3": "--", "4": "-."}
 REGION_COLORS = {tags.FLUID: "#9ecae1", tags.URETER: "#fdae6b", tags.STENT: "#a1d99b"}
 MM, KPA, MM_S, MM3_S = 1e3, 1e-3, 1e3, 1e9
-
-plt.rcParams.update({"font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8, "axes.grid": True,
-                     "grid.alpha": 0.3, "figure.constrained_layout.use": True})
 
 
 def _models(ds: xr.Dataset, stented_only: bool = False, var: str | None = None):
@@ -127,6 +98,7 @@ def _slice_tets(coords, cells):
     return polys, np.array(regs)
 
 
+@styled
 def fig02_domain(msh_path, hole_z: float | None = None, title: str | None = None):
     """Computational domain of model 3: mesh in the mirror plane x = 0 coloured by region, with a zoom
     on the outlet-most side hole (cut through its axis). Full models: section of the tetrahedra by x = 0;
@@ -180,6 +152,7 @@ def fig02_domain(msh_path, hole_z: float | None = None, title: str | None = None
 
 
 # ---------------------------------------------------------------------------------------------- Fig. 3
+@styled
 def fig03_mesh_convergence(conv: xr.Dataset):
     """Stent von Mises stress along the probe line at the convergence time, one line per mesh level."""
     fig, ax = plt.subplots(figsize=(6.0, 3.6))
@@ -199,6 +172,7 @@ def fig03_mesh_convergence(conv: xr.Dataset):
 
 
 # ---------------------------------------------------------------------------------------------- Fig. 4
+@styled
 def fig04_outlet_flow(ds: xr.Dataset):
     """Mean axial outlet velocity (paper's measure) and outlet volumetric flux vs time, all models."""
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.0, 5.0), sharex=True)
@@ -217,6 +191,7 @@ def fig04_outlet_flow(ds: xr.Dataset):
 
 
 # ---------------------------------------------------------------------------------------------- Fig. 5
+@styled
 def fig05_wall_displacement(ds: xr.Dataset, times=WAVE_TIMES):
     """Radial displacement of the ureter outer wall vs z at `times` (default: the paper's instants; the
     workflow passes figures.wave_times), all models. Times without a probe snapshot are skipped."""
@@ -251,6 +226,7 @@ def fig05_wall_displacement(ds: xr.Dataset, times=WAVE_TIMES):
 
 
 # ------------------------------------------------------------------------------------------ Figs. 6-9
+@styled
 def fig_hole_velocity(ds: xr.Dataset, time: float):
     """Velocity along the hole axis (y) across the outlet-most side hole vs distance from its centre."""
     fig, ax = plt.subplots(figsize=(5.0, 3.4))
@@ -274,6 +250,7 @@ def fig_hole_velocity(ds: xr.Dataset, time: float):
 
 
 # --------------------------------------------------------------------------------------------- Fig. 10
+@styled
 def fig10_stent_von_mises(ds: xr.Dataset):
     """Maximum von Mises stress over the stent volume vs time, stented models."""
     fig, ax = plt.subplots(figsize=(6.0, 3.6))
@@ -287,6 +264,7 @@ def fig10_stent_von_mises(ds: xr.Dataset):
 
 
 # ------------------------------------------------------------------------------------- side-hole flux
+@styled
 def fig_hole_flux(ds: xr.Dataset):
     """Flux through every side hole vs time (positive outward, lumen -> annulus), one panel per stented
     model, lines coloured by the hole's axial position."""
@@ -342,49 +320,16 @@ def table1(cfg: dict, sidecars) -> list[dict]:
     return rows
 
 
-def write_table(rows: list[dict], csv_path=None, md_path=None) -> None:
-    """Table 1 as CSV and Markdown, atomically."""
-    cols = list(rows[0])
-    if csv_path:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
-        with atomic_path(csv_path) as tmp:
-            tmp.write_text(buf.getvalue())
-    if md_path:
-        head = {"model": "Model", "label": "Label", "hole_pair_spacing_mm": "Hole-pair spacing (mm)",
-                "side_holes": "Side holes", "hole_pairs_z_mm": "Hole-pair positions z (mm)",
-                "hole_channels_found": "Hole channels in mesh", "symmetry": "Symmetry", "mesh_level": "Mesh",
-                "elements_total": "Elements", "elements_fluid": "fluid", "elements_ureter": "ureter",
-                "elements_stent": "stent"}
-        lines = ["| " + " | ".join(head.get(c, c) for c in cols) + " |",
-                 "|" + "|".join("---" for _ in cols) + "|"]
-        lines += ["| " + " | ".join(str(r[c]) for c in cols) + " |" for r in rows]
-        with atomic_path(md_path) as tmp:
-            tmp.write_text("\n".join(lines) + "\n")
+TABLE1_HEAD = {"model": "Model", "label": "Label", "hole_pair_spacing_mm": "Hole-pair spacing (mm)",
+               "side_holes": "Side holes", "hole_pairs_z_mm": "Hole-pair positions z (mm)",
+               "hole_channels_found": "Hole channels in mesh", "symmetry": "Symmetry", "mesh_level": "Mesh",
+               "elements_total": "Elements", "elements_fluid": "fluid", "elements_ureter": "ureter",
+               "elements_stent": "stent"}
 
 
-# ------------------------------------------------------------------------------------------------ save
-def save_figure(fig, paths, dpi: float = 150) -> None:
-    """Write `fig` to every path (format from the extension), each atomically: a temporary sibling that
-    ends with the real extension, renamed into place."""
-    for p in paths:
-        p = Path(p)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=p.suffix, dir=p.parent)
-        os.close(fd)
-        try:
-            fig.savefig(tmp, dpi=dpi, format=p.suffix.lstrip("."))
-            os.replace(tmp, p)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-    plt.close(fig)
-
-
-def figure_paths(stem, formats) -> list[str]:
-    return [f"{stem}.{ext}" for ext in formats]
+def write_table1(rows: list[dict], csv_path=None, md_path=None) -> None:
+    """Table 1 as CSV and Markdown, atomically (data.tables.write_table)."""
+    write_table(rows, csv_path, md_path, header=[TABLE1_HEAD.get(c, c) for c in rows[0]])
 
 
 # ------------------------------------------------------------------------------------ stability map
@@ -401,6 +346,7 @@ STABILITY_UNITS = {"time_step": (1.0, "s"), "mesh_level": (1.0, "cells"), "bulk_
                    "wave_width": (MM, "mm"), "viscosity": (1e3, "mPa s"), "hole_elements": (1.0, "")}
 
 
+@styled
 def stability_map(ds: xr.Dataset):
     """Stability matrix (ureterfsi.stability.combine): one panel row per varied quantity.
 

@@ -3,7 +3,7 @@
 One OpenCASCADE model per (model, level, symmetry): ureter wall tube, fluid lumen, stent tube (coaxial, or its
 axis displaced along x by geometry.stent_offset) with radial side holes on the y axis, or alternating y and x
 (geometry.hole_arrangement), fragmented into a conforming multi-region tetrahedral mesh. Cells and
-facets are gmsh physical groups numbered as in `ureterfsi.tags`; every boundary facet and every interface
+facets are gmsh physical groups numbered as in `ureterfsi.mesh.tags`; every boundary facet and every interface
 facet carries exactly one tag. "half" keeps x >= 0, or y >= 0 for an offset stent (the x = 0 plane is no mirror
 then); "quarter" keeps x, y >= 0 and refuses an offset stent. "axisymmetric" (model 1 only) is the r-z section, r = x, z = y.
 
@@ -20,12 +20,12 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ureterfsi import tags
-from ureterfsi.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
+from ureterfsi.mesh import tags
+from ureterfsi.mesh.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
                                 lumen_area, subdomain_volumes)
-from ureterfsi.checked_io import BadFile, check_msh, gmsh_error
-from ureterfsi.meshfile import group_elements, read_msh
-from ureterfsi.provenance import atomic_path, provenance_attrs, write_json
+from ureterfsi.data.checked import BadFile, check_msh, gmsh_error
+from ureterfsi.mesh.io import group_elements, read_msh
+from ureterfsi.data.provenance import atomic_path, provenance_attrs, write_json
 
 # choice: away from a refined region the element size grows linearly to the bulk size over
 # (h_bulk - h) / GRADING (sizes at size factor 1): refinement confined to a thin layer around the holes,
@@ -40,7 +40,7 @@ OPTIMIZE_THRESHOLD = 0.4
 SEAM_ANGLE_Z = 1.25 * math.pi
 SEAM_ANGLE_HOLE = -0.5 * math.pi
 # choice: the strictured wall profile is an interpolating spline through this many points of the cosine bump
-# (ureterfsi.geometry.Stricture.bump), one of them at its centre, so the narrowest radius is exact.
+# (ureterfsi.mesh.geometry.Stricture.bump), one of them at its centre, so the narrowest radius is exact.
 STRICTURE_SPLINE_POINTS = 41
 # choice: the fluid element size in a stricture is at most the local gap / this many (at size factor 1), so the
 # narrowed annulus keeps elements across it (the bulk size alone leaves none in a gap of a few per cent).

@@ -16,9 +16,10 @@ from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
+from ureterfsi import REPO_ROOT
+
 # Generation of the layout of every file ureterfsi writes (attribute FORMAT_VERSION_ATTR, set by
-# provenance_attrs); readers (ureterfsi.checked_io) refuse another one. Raise it when a reader would
+# provenance_attrs); readers (ureterfsi.data.checked) refuse another one. Raise it when a reader would
 # misread an older file.
 FORMAT_VERSION = 1
 FORMAT_VERSION_ATTR = "ureterfsi_format_version"

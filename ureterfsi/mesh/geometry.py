@@ -155,14 +155,6 @@ def hole_pair_axes(geom: UreterGeometry, model: StentModel) -> np.ndarray:
     return np.where(k % 2 == 0, 1, 0) if geom.hole_arrangement == "rotated_90" else np.ones_like(k)
 
 
-def outlet_hole_position(geom: UreterGeometry, model: StentModel) -> float:
-    """Axial position of the outlet-most hole pair (paper §3.4-3.5, Figs. 6-9)."""
-    z = hole_pair_positions(geom, model)
-    if z.size == 0:
-        raise ValueError(f"model {model.name} has no side holes")
-    return float(z.max())
-
-
 def hole_channel_volume(geom: UreterGeometry) -> float:
     """Exact volume of one radial hole channel through the stent wall.
 

@@ -1,4 +1,4 @@
-"""Reading a gmsh .msh file (as ureterfsi.mesh writes it): its nodes and the simplices of its physical groups.
+"""Reading a gmsh .msh file (as ureterfsi.mesh.build writes it): its nodes and the simplices of its physical groups.
 
 Imports neither dolfinx nor gmsh at import time (gmsh when a file is read), so figures use it without the
 solver stack. Connectivity is in rows of `coords` (0-based): row k holds gmsh node tag k + 1.
@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .checked_io import check_msh, gmsh_error
+from ureterfsi.data.checked import check_msh, gmsh_error
 
 
 def group_elements(dim: int, phys: int) -> np.ndarray:
@@ -50,7 +50,7 @@ class MeshFile:
 
 def read_msh(path) -> MeshFile:
     """The nodes, the simplices of every physical group and the group names of a .msh 4.1 file (checked by
-    ureterfsi.checked_io.check_msh; BadFile if gmsh cannot read it)."""
+    ureterfsi.data.checked.check_msh; BadFile if gmsh cannot read it)."""
     import gmsh
 
     gmsh.initialize()

@@ -9,8 +9,8 @@ from __future__ import annotations
 import logging
 import sys
 
-from .checked_io import BadFile
-from .config import ConfigError
+from ureterfsi.data.checked import BadFile
+from ureterfsi.config import ConfigError
 
 
 def _expected(err: BaseException) -> bool:

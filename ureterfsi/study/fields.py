@@ -11,7 +11,7 @@ What is written (config `fields`), on the reference (ALE) mesh of each part:
 Nodal fields are the vertex values of the P2 (velocity, displacement) and P1 (pressure) solution.
 
 Parts: the fully coupled run writes one part, `domain` (the whole mesh, with the cell tags as `subdomain`,
-ureterfsi.tags); the one-way rung writes `urine` (its fluid submesh) and `stent` (its stent submesh; the wall
+ureterfsi.mesh.tags); the one-way rung writes `urine` (its fluid submesh) and `stent` (its stent submesh; the wall
 is solved in r-z, its motion is the urine's displacement on the wall). Each part is one `<part>.xdmf`
 (a temporal collection) over `<part>_mesh.h5` and one `<part>_s<step>.h5` per snapshot; `fields.json` lists
 parts, times, quantities with units, sizes and the time spent writing. The directory is written as
@@ -31,9 +31,9 @@ import numpy as np
 from dolfinx import fem, io
 from dolfinx import log as dlog
 
-from . import tags
-from .fsi import Observer
-from .metadata import FIELD_VARIABLES, cf_meta
+from ureterfsi.mesh import tags
+from ureterfsi.fsi import Observer
+from ureterfsi.data.cf import FIELD_VARIABLES, cf_meta
 
 FORMATS = ("xdmf",)
 XI = "http://www.w3.org/2001/XInclude"
@@ -74,7 +74,7 @@ class _Nodal:
 
 
 class _CellMean:
-    """DG0 output: the cell mean of a DG field (ureterfsi.probes.CellField) over `cells`, NaN elsewhere."""
+    """DG0 output: the cell mean of a DG field (ureterfsi.fsi.probes.CellField) over `cells`, NaN elsewhere."""
 
     def __init__(self, name, cell_field, mesh, cells=None):
         self.out = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name=name)

@@ -17,22 +17,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-# netCDF4 before anything that loads dolfinx: with dolfinx's (MPI) HDF5 loaded first, netCDF4's bundled
-# HDF5 segfaults on the first file write (PETSc SEGV handler, MPI_ABORT 59).
-import netCDF4  # noqa: F401,I001
 import numpy as np
 import xarray as xr
 
-from .checked_io import RUN_FILE, BadFile, Contract, open_netcdf
-from .metadata import VARIABLES, annotate, at_time, cf_attrs, write_netcdf
-from .provenance import provenance_attrs
+from ureterfsi.data.checked import RUN_FILE, BadFile, Contract, open_netcdf
+from ureterfsi.data.cf import VARIABLES, annotate, at_time, cf_attrs, write_netcdf
+from ureterfsi.data.provenance import provenance_attrs
 
 DEFAULT_LABELS = {"1": "No stent", "2": "5 mm", "3": "10 mm", "4": "25 mm"}
 TIME_DECIMALS = 9            # times equal to 1 ns are the same instant (probe times, union grid)
 # run attrs that are not copied per run (dataset-level metadata of the run file)
 _SKIP_RUN_ATTRS = ("Conventions", "title")
 
-# what the readers of the study datasets (figures, ureterfsi.gci) rely on
+# what the readers of the study datasets (figures, ureterfsi.analyses.gci) rely on
 MODELS_DATASET = Contract("models dataset", attrs=("mesh_level", "models"),
                           variables=("model", "model_label", "time", "z", "probe_time", "outlet_flux",
                                      "wall_radial_displacement", "outlet_hole_z"), units=VARIABLES)
@@ -301,5 +298,5 @@ def combine_levels(paths, time: float, cfg: dict | None = None) -> xr.Dataset:
 
 
 def write_dataset(ds: xr.Dataset, path) -> None:
-    """CF-1.8 netCDF output, atomically (ureterfsi.metadata.write_netcdf)."""
+    """CF-1.8 netCDF output, atomically (ureterfsi.data.cf.write_netcdf)."""
     write_netcdf(ds, path)

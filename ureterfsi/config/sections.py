@@ -1,0 +1,30 @@
+"""The configuration sections each job reads: a change re-runs the job (its rerun trigger) and a file made from
+other values is refused. The one list of them: rule mesh, rule solve (and design_solve), the one-way rung's wall."""
+from __future__ import annotations
+
+# the geometry the r-z wall solve reads (ureterfsi.scenes.wall_rz.WallModel): the stent and its holes do not enter
+WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
+                 "stricture_position")
+
+
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")
+
+
+def run_sections(cfg: dict, model: str) -> dict:
+    """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
+    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
+    return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
+
+
+def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:
+    """The configuration entering a mesh (rule mesh's rerun trigger) with its level and symmetry."""
+    return {"geometry": cfg["geometry"], "mesh": cfg["mesh"], "model": cfg["models"][model],
+            "level": level, "symmetry": symmetry}
+
+
+def wall_sections(cfg: dict) -> dict:
+    """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
+    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
+    return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
+        k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
+        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}

@@ -1,0 +1,6 @@
+"""What the Snakemake workflow needs of the package.
+
+log         the body of every workflow script: logging into the rule's log, one-line errors
+machine     the machine's physical memory (the local memory budget)
+"""
+__all__ = ["log", "machine"]
