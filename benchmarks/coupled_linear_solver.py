@@ -40,7 +40,7 @@ def run_variant(args):
     from ureterfsi.config import load_config_files
     from ureterfsi.fsi import Observer, TimeIntegrator, TimeSettings
     from ureterfsi.fsi.problem import MonolithicFSI
-    from ureterfsi.mesh.build import load_mesh
+    from ureterfsi.mesh.io import load_mesh
     from ureterfsi.scenes.ureter import ureter_scene
     from ureterfsi.study.cli import configure_logging
     from ureterfsi.study.options import solver_options

@@ -36,7 +36,7 @@ from ureterfsi.config import load_config_files
 from ureterfsi.fsi.linear_solvers import flow_lu_options, schur_fieldsplit_options, set_options
 from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.fsi.submesh import extract
-from ureterfsi.mesh.build import load_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.scenes.ureter import ureter_fluid_scene
 from ureterfsi.study import oneway
 from ureterfsi.study.options import solver_options

@@ -22,7 +22,8 @@ from mpi4py import MPI
 from ureterfsi.config import load_config_files
 from ureterfsi.fsi import TimeIntegrator, TimeSettings
 from ureterfsi.fsi.problem import MonolithicFSI
-from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.scenes.ureter import ureter_scene
 from ureterfsi.study.options import solver_options
 

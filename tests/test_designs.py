@@ -334,7 +334,7 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
     then posed on the extension, which its prediction (0.89) accepts."""
     import shutil
 
-    from ureterfsi.mesh.build import load_mesh
+    from ureterfsi.mesh.io import load_mesh
     from ureterfsi.study.oneway import WALL_MOTION, WallHistory, fluid_problem
     from ureterfsi.data.checked import open_netcdf
     from mpi4py import MPI
@@ -593,13 +593,14 @@ def test_offset_stent_design_point_end_to_end(tmp_path):
 
 def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     """The y = 0 mirror plane holds for an offset stent: the half model (y >= 0) of an offset stent with rotated pairs
-    gives the full model's flows on its mirror image (ureterfsi.mesh.build.mirror_mesh, node for node) to round-off, hole
+    gives the full model's flows on its mirror image (ureterfsi.mesh.io.mirror_mesh, node for node) to round-off, hole
     by hole (the +y holes whole, the x holes cut in half by the plane) and in the mirror-weighted hole total."""
     import netCDF4  # noqa: F401
     from ureterfsi.study import oneway
     from ureterfsi.config import load_config_files
     from ureterfsi.designs.results import hole_mirror_weights
-    from ureterfsi.mesh.build import build_mesh, mirror_mesh
+    from ureterfsi.mesh.build import build_mesh
+    from ureterfsi.mesh.io import mirror_mesh
     from ureterfsi.study.options import RunSpec
 
     cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml"]),

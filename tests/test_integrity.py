@@ -14,7 +14,8 @@ from test_aggregate_figures import synthetic_run
 from ureterfsi.analyses import aggregate
 from ureterfsi.data.checked import MESH_SIDECAR, BadFile, read_json
 from ureterfsi.config import load_config_files
-from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.data.provenance import FORMAT_VERSION_ATTR
 
 

@@ -11,7 +11,8 @@ from mpi4py import MPI
 from ureterfsi.mesh import tags
 from ureterfsi.config import load_config
 from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
-from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.mesh.io import read_msh
 
 CASES = [("1", "quarter"), ("2", "quarter"), ("3", "quarter"), ("4", "quarter"), ("4", "half"), ("4", "full"),

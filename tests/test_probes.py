@@ -264,7 +264,8 @@ def test_wall_line_lies_on_the_outer_facets(tmp_path, repo_root, symmetry, fract
     from ureterfsi.mesh import tags
     from ureterfsi.config import load_config, load_config_files
     from ureterfsi.mesh.geometry import UreterGeometry
-    from ureterfsi.mesh.build import build_mesh, load_mesh
+    from ureterfsi.mesh.build import build_mesh
+    from ureterfsi.mesh.io import load_mesh
 
     mini = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
     cfg = load_config(mini, {"geometry": {"stricture_fraction": fraction, "stricture_length": 0.004,

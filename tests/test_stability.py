@@ -176,7 +176,7 @@ def test_the_package_reads_cases_and_datasets_without_dolfinx():
 
 
 def test_matrix_dataset_and_stability_map(runs, hole_run, tmp_path):
-    from ureterfsi.plotting.paper import stability_map
+    from ureterfsi.plotting.stability import stability_map
     from ureterfsi.plotting.style import save_figure
 
     paths = []

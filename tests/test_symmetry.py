@@ -1,7 +1,7 @@
 """Symmetry conditions are exact: the quarter model equals the full model on the mirrored quarter mesh.
 
 The quarter and full study meshes are generated separately (their stent and hole quantities differ by
-4-7 % on the 50 mm model, the ladder's one_way_full rung). `ureterfsi.mesh.build.mirror_mesh` repeats the
+4-7 % on the 50 mm model, the ladder's one_way_full rung). `ureterfsi.mesh.io.mirror_mesh` repeats the
 quarter mesh node for node across x = 0 and y = 0, so the two solves below share one discretisation and
 differ only by the mirror-plane conditions, which hold exactly for the centred stent: what the quarter
 model loses against the full one on its own mesh is round-off (measured 1e-13), and the ladder's 4-7 % are
@@ -14,7 +14,8 @@ import pytest
 
 from ureterfsi.study import oneway
 from ureterfsi.config import load_config_files
-from ureterfsi.mesh.build import build_mesh, mirror_mesh
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.mesh.io import mirror_mesh
 from ureterfsi.study.options import RunSpec
 
 

@@ -174,7 +174,7 @@ def test_sub_domains_keep_their_tags(mini, mini_dir):
 
     from ureterfsi.mesh import tags
     from ureterfsi.fsi.submesh import extract, untagged_boundary_facets
-    from ureterfsi.mesh.build import load_mesh
+    from ureterfsi.mesh.io import load_mesh
 
     msh, ct, ft = load_mesh(mini_dir / "model3.msh", MPI.COMM_WORLD)
     fluid = extract(msh, ct, ft, [tags.FLUID])

@@ -158,7 +158,7 @@ VARIABLES = {
     "hole_elements_measured": ("1", "hole diameter / mean edge length of the hole-wall triangles of the mesh "
                                "(NaN: no holes)"),
     "is_baseline": ("1", "1 for the baseline of the case's scene (r-z: baseline; 3D: the study's own mesh)"),
-    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.build.hole_channels)"),
+    "hole_channels_found": ("1", "side-hole channels found in the mesh (ureterfsi.mesh.quality.hole_channels)"),
     "mesh_min_quality": ("1", "smallest signed inverse condition number (gmsh minSICN) of the mesh cells"),
     "bulk_ratio": ("1", "kappa / (C10 + C01) of the ureter wall"),
     "density_ratio": ("1", "ureter wall density / urine density"),

@@ -3,6 +3,7 @@
 geometry    ureter/stent/hole geometry from the configuration, analytic volumes
 tags        integer tags of the subdomains and boundaries of every mesh
 build       gmsh meshes (full, half, quarter, axisymmetric) with sidecar statistics
-io          the .msh reader
+quality     the measures of a built mesh: cell quality, hole channels, resolution across a hole
+io          .msh files: read_msh, the one writer, load_mesh (dolfinx), mirror_mesh
 """
-__all__ = ["build", "geometry", "io", "tags"]
+__all__ = ["build", "geometry", "io", "quality", "tags"]

@@ -17,15 +17,13 @@ import time
 
 import gmsh
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ureterfsi.mesh import tags
 from ureterfsi.mesh.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
                                 lumen_area, subdomain_volumes)
-from ureterfsi.data.checked import BadFile, check_msh, gmsh_error
-from ureterfsi.mesh.io import group_elements, read_msh
-from ureterfsi.data.provenance import atomic_path, provenance_attrs, write_json
+from ureterfsi.mesh.io import group_elements, write_msh
+from ureterfsi.mesh.quality import simplex_measure, cell_quality, hole_channels, hole_resolution
+from ureterfsi.data.provenance import provenance_attrs, write_json
 
 # choice: away from a refined region the element size grows linearly to the bulk size over
 # (h_bulk - h) / GRADING (sizes at size factor 1): refinement confined to a thin layer around the holes,
@@ -296,77 +294,6 @@ def _optimize(dim: int) -> str:
     return "gmsh+relocate3d"
 
 
-def _measure(conn: np.ndarray, coords: np.ndarray) -> float:
-    """Total volume (3D) or area (2D) of simplices."""
-    p = coords[conn - 1][:, :, :conn.shape[1] - 1]
-    d = p[:, 1:] - p[:, :1]
-    return float(np.abs(np.linalg.det(d)).sum() / math.factorial(d.shape[1]))
-
-
-def _quality(dim: int) -> dict:
-    """gmsh minSICN (plugin AnalyseMeshQuality, ICN measure) of all cells: min, 1st percentile, median."""
-    for opt, val in (("JacobianDeterminant", 0), ("IGEMeasure", 0), ("ICNMeasure", 1), ("CreateView", 1),
-                     ("DimensionOfElements", dim)):
-        gmsh.plugin.setNumber("AnalyseMeshQuality", opt, val)
-    gmsh.plugin.run("AnalyseMeshQuality")
-    view = gmsh.view.getTags()[-1]
-    _, _, data, _, _ = gmsh.view.getModelData(view, 0)
-    gmsh.view.remove(view)
-    q = np.concatenate(data)
-    return {"min": float(q.min()), "p01": float(np.percentile(q, 1)), "median": float(np.median(q))}
-
-
-def _hole_wall_triangles(coords: np.ndarray, tris: np.ndarray, stent_offset: float = 0.0) -> np.ndarray:
-    """FLUID_STENT triangles on hole walls: normal across the radial direction from the stent axis (x_s, 0)
-    (hole axis radial), unlike the stent's lumen and outer walls."""
-    p = coords[tris - 1]
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    n /= np.linalg.norm(n, axis=1)[:, None]
-    c = p.mean(axis=1) - np.array([stent_offset, 0.0, 0.0])
-    er = c[:, :2] / np.linalg.norm(c[:, :2], axis=1)[:, None]
-    return tris[np.abs((n[:, :2] * er).sum(axis=1)) < 0.7]
-
-
-def hole_resolution(coords: np.ndarray, tris: np.ndarray, diameter: float, stent_offset: float = 0.0) -> dict:
-    """Mean edge length of the hole-wall triangles and the elements across a hole it gives (diameter / it):
-    the resolution the mesh has, whatever the size fields asked for."""
-    wall = _hole_wall_triangles(coords, tris, stent_offset)
-    if not len(wall):
-        return {}
-    p = coords[wall - 1]
-    edges = np.linalg.norm(p - np.roll(p, 1, axis=1), axis=2)
-    h = float(edges.mean())
-    return {"hole_wall_edge_mean": h, "hole_elements_across": diameter / h}
-
-
-def hole_channels(coords: np.ndarray, tris: np.ndarray, stent_offset: float = 0.0) -> list:
-    """Hole channels found in a mesh: connected groups of FLUID_STENT triangles on hole walls
-    (_hole_wall_triangles). Returns per channel {"axis", "sign", "z", "across"}: axis "x" or "y" the one its wall
-    lies along (from the stent axis (x_s, 0)), sign the side on it, z its centre and across the [min, max] of its
-    wall's other in-plane coordinate (-a to a for a whole hole, 0 to a for one cut in half by a mirror plane);
-    sorted by z, axis, sign.
-    """
-    wall = _hole_wall_triangles(coords, tris, stent_offset)
-    if not len(wall):
-        return []
-    nodes, local = np.unique(wall, return_inverse=True)
-    local = local.reshape(-1, 3)
-    rows = np.repeat(np.arange(len(wall)), 3)  # triangle-node incidence; components via bipartite graph
-    graph = coo_matrix((np.ones(rows.size), (rows, len(wall) + local.ravel())),
-                       shape=(len(wall) + nodes.size,) * 2)
-    _, label = connected_components(graph, directed=False)
-    shift = np.array([stent_offset, 0.0, 0.0])
-    cw = coords[wall - 1].mean(axis=1) - shift
-    out = []
-    for k in np.unique(label[:len(wall)]):
-        c = cw[label[:len(wall)] == k].mean(axis=0)
-        axis = int(abs(c[1]) > abs(c[0]))
-        across = coords[wall[label[:len(wall)] == k].ravel() - 1, 1 - axis] - shift[1 - axis]
-        out.append({"axis": "xy"[axis], "sign": int(np.sign(c[axis])), "z": float(c[2]),
-                    "across": [float(across.min()), float(across.max())]})
-    return sorted(out, key=lambda t: (round(t["z"], 6), t["axis"], t["sign"]))
-
-
 def _axisymmetric(geom: UreterGeometry) -> dict:
     """r-z section of the stent-free model: fluid [0, Ri] x [0, L], ureter wall [Ri, Ro] x [0, L] (the faces under
     R_i(z) and between R_i(z), R_o(z) when strictured)."""
@@ -422,7 +349,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             analytic = {"fluid": lumen_area(geom) if geom.strictured else geom.ureter_inner_radius * geom.length,
                         "ureter": (geom.ureter_outer_radius - geom.ureter_inner_radius) * geom.length,
                         "stent": 0.0}
-        measured = {k: (_measure(cells[k], coords) if k in cells else 0.0) for k in names}
+        measured = {k: (simplex_measure(cells[k], coords) if k in cells else 0.0) for k in names}
         stent_facets = group_elements(2, tags.FLUID_STENT) if tags.FLUID_STENT in facets else None
         channels = hole_channels(coords, stent_facets, geom.stent_offset) if stent_facets is not None else []
         info = {
@@ -431,7 +358,7 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             "cells": {k: int(len(v)) for k, v in cells.items()},
             "cells_total": int(sum(len(v) for v in cells.values())),
             "nodes": int(node_tags.size),
-            "quality_minSICN": _quality(dim),
+            "quality_minSICN": cell_quality(dim),
             "measure": "area" if dim == 2 else "volume",
             "subdomain_measure": {k: {"mesh": measured[k], "analytic": analytic[k],
                                       "rel_error": (measured[k] / analytic[k] - 1) if analytic[k] else 0.0}
@@ -447,134 +374,9 @@ def build_mesh(cfg: dict, model: str, level: str, symmetry: str, msh_path, sidec
             "mesh_wall_time_s": wall_time,
             "gmsh_version": gmsh.__version__,
         }
-        _write_msh(msh_path)
+        write_msh(msh_path)
     finally:
         gmsh.finalize()
     info.update(provenance_attrs(cfg))
     write_json(sidecar_path, info)
     return info
-
-
-def _write_msh(path) -> None:
-    """Write the current gmsh model's physical groups to `path` (ASCII .msh 4.1), atomically."""
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.option.setNumber("Mesh.SaveAll", 0)
-    gmsh.option.setNumber("Mesh.Binary", 0)
-    with atomic_path(path) as tmp:
-        part = tmp.with_name(tmp.name[:-len(".part")])  # gmsh picks the format from the extension
-        try:
-            gmsh.write(str(part))
-            part.replace(tmp)
-        finally:
-            part.unlink(missing_ok=True)
-
-
-def load_mesh(msh_path, comm, expect: tuple | None = None):
-    """(mesh, cell_tags, facet_tags) of a mesh written by build_mesh (gdim 2 for the r-z section). With `expect`
-    = (symmetry, stent, what): the mesh must be of that symmetry's dimension (2 for axisymmetric, else 3) and
-    have stent cells exactly if `stent`, else BadFile naming `what` (the run it was handed to).
-
-    dolfinx 0.5.2's gmshio.read_from_msh is broken (finalizes gmsh before building the mesh), so the
-    file is merged here on rank 0 and handed to gmshio.model_to_mesh on every rank.
-    """
-    from dolfinx.io import gmshio   # lazy: building a mesh (rule mesh) needs no dolfinx
-
-    gdim, bad = None, None
-    if comm.rank == 0:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        try:
-            check_msh(msh_path)
-            try:
-                gmsh.merge(str(msh_path))
-            except Exception as err:  # gmsh raises a bare Exception with its last error message
-                raise gmsh_error(msh_path, err) from None
-            groups = gmsh.model.getPhysicalGroups()
-            cell_dim = max((d for d, _ in groups), default=0)
-            cell_tags = {t for d, t in groups if d == cell_dim}
-            if cell_dim not in (2, 3) or not cell_tags <= set(tags.CELL_NAMES) or tags.FLUID not in cell_tags:
-                raise BadFile(msh_path, f"not a ureterfsi mesh (physical groups {sorted(groups)}; expected cells "
-                                        f"tagged {sorted(tags.CELL_NAMES)} with fluid {tags.FLUID})")
-            if expect is not None:
-                symmetry, stent, what = expect
-                want_dim, has_stent = 2 if symmetry == "axisymmetric" else 3, tags.STENT in cell_tags
-                if cell_dim != want_dim or has_stent != bool(stent):
-                    def kind(d, s):
-                        return f"a {d}D mesh {'with' if s else 'without'} stent cells"
-                    raise BadFile(msh_path, f"{kind(cell_dim, has_stent)}, but {what} needs "
-                                            f"{kind(want_dim, bool(stent))} (the mesh of another model or symmetry?); "
-                                            f"re-run the rule that makes it")
-            gdim = cell_dim
-        except BadFile as err:
-            bad = err
-            gmsh.finalize()
-    bad = comm.bcast(bad, root=0)
-    if bad is not None:
-        raise bad
-    gdim = comm.bcast(gdim, root=0)
-    try:
-        return gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim)
-    finally:
-        if comm.rank == 0:
-            gmsh.finalize()
-
-
-def mirror_mesh(src, dst, symmetry: str) -> dict:
-    """Reflect a half or quarter mesh into the full one (x = 0 mirror, then y = 0 for a quarter; y = 0 for the
-    half model of an offset stent, the plane its symmetry_y facets name) and write
-    it to `dst` (.msh 4.1, the same physical groups, the mirror-plane facet groups dropped: they become
-    interior). The full mesh is the symmetric mesh's discretisation repeated, node for node, so a full-model
-    solve on it differs from the symmetric solve only by what the symmetry conditions change: nothing, in
-    exact arithmetic, for a symmetric problem. Returns {"cells", "nodes"}."""
-    planes = {"half": [(0, tags.SYMMETRY_X)], "quarter": [(0, tags.SYMMETRY_X), (1, tags.SYMMETRY_Y)]}
-    if symmetry not in planes:
-        raise ValueError(f"mirror_mesh: symmetry must be 'half' or 'quarter', got {symmetry!r}")
-    src_mesh = read_msh(src)
-    coords, names, dim = src_mesh.coords, src_mesh.names, src_mesh.dim
-    groups = {k: c + 1 for k, c in src_mesh.groups.items()}     # node tags
-    if dim != 3:
-        raise ValueError(f"mirror_mesh: {src} is not a 3D mesh")
-    if symmetry == "half" and (dim - 1, tags.SYMMETRY_X) not in groups:
-        planes["half"] = [(1, tags.SYMMETRY_Y)]
-    tol = 1e-9 * np.abs(coords).max()
-    for axis, plane_tag in planes[symmetry]:
-        groups.pop((dim - 1, plane_tag), None)
-        n = coords.shape[0]
-        on_plane = np.abs(coords[:, axis]) <= tol
-        image = np.where(on_plane, np.arange(n), n + np.arange(n))   # 0-based node -> its mirror image
-        mirrored = coords.copy()
-        mirrored[:, axis] *= -1.0
-        coords = np.vstack([coords, mirrored])
-        for key, conn in groups.items():
-            im = image[conn - 1] + 1
-            if key[0] == dim:
-                im[:, [0, 1]] = im[:, [1, 0]]         # a reflection flips the orientation: swap back
-            groups[key] = np.vstack([conn, im])
-    # compact node numbering 1..N (gmshio needs contiguous node tags)
-    used = np.unique(np.concatenate([c.ravel() for c in groups.values()]))
-    number = np.zeros(coords.shape[0] + 1, dtype=np.int64)
-    number[used] = np.arange(1, used.size + 1)
-    coords, groups = coords[used - 1], {k: number[c] for k, c in groups.items()}
-    used = np.arange(1, used.size + 1)
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("mirrored")
-        first = True
-        element_tag = 1
-        for (d, t), conn in sorted(groups.items(), key=lambda kv: -kv[0][0]):
-            entity = gmsh.model.addDiscreteEntity(d)
-            if first:      # every node lives on the first volume entity
-                gmsh.model.mesh.addNodes(d, entity, used, coords[used - 1].ravel())
-                first = False
-            etype = gmsh.model.mesh.getElementType("tetrahedron" if d == 3 else "triangle", 1)
-            gmsh.model.mesh.addElementsByType(entity, etype, np.arange(element_tag, element_tag + len(conn)),
-                                              conn.ravel())
-            element_tag += len(conn)
-            gmsh.model.addPhysicalGroup(d, [entity], t)
-            if names[(d, t)]:
-                gmsh.model.setPhysicalName(d, t, names[(d, t)])
-        _write_msh(dst)
-    finally:
-        gmsh.finalize()
-    return {"cells": int(sum(len(c) for (d, _), c in groups.items() if d == dim)), "nodes": int(used.size)}

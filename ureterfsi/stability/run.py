@@ -17,7 +17,8 @@ from ureterfsi.data.checked import MESH_SIDECAR, read_json
 from ..fsi import MonolithicFSI, NewtonDivergence, TimeIntegrator, TimeSettings
 from ..fsi.integrator import MeshInversion, StepFailure
 from ureterfsi.mesh.geometry import UreterGeometry
-from ureterfsi.mesh.build import build_mesh, load_mesh
+from ureterfsi.mesh.build import build_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.data.cf import annotate
 from ureterfsi.data.provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre, ureter_scene

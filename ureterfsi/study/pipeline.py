@@ -14,7 +14,7 @@ from mpi4py import MPI
 from ureterfsi.study.fields import field_writer
 from ..fsi import TimeIntegrator, TimeSettings
 from ..fsi.problem import MonolithicFSI
-from ureterfsi.mesh.build import load_mesh
+from ureterfsi.mesh.io import load_mesh
 from ureterfsi.data.cf import write_netcdf
 from .options import RunSpec, time_settings
 from .probes import UreterProbes, probes_dataset

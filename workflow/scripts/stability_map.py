@@ -1,8 +1,8 @@
 """Snakemake script of rule `stability_map`: the stability dataset -> results/figures/stability_map.{png,pdf}
-(ureterfsi.plotting.paper.stability_map)."""
+(ureterfsi.plotting.stability.stability_map)."""
 import logging
 
-from ureterfsi.plotting.paper import stability_map
+from ureterfsi.plotting.stability import stability_map
 from ureterfsi.plotting.style import save_figure
 from ureterfsi.data.checked import Contract, open_netcdf
 from ureterfsi.workflow.log import run_script
