@@ -80,7 +80,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
     design of N = 2 over two parameters: 12 rows, 8 points, with its Sobol' indices)."""
     from test_aggregate_figures import synthetic_run
     from ureterfsi.designs import results as design_results
-    from ureterfsi.designs import space as designs
+    from ureterfsi.designs.expand import studies
     from ureterfsi.config import load_config
 
     grid = {"model": "3", "level": "coarse",
@@ -91,7 +91,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
             "hole_diameter": [5e-4, 7e-4], "peak_traction": [4e4, 6e4]}}}
     cfg = load_config(cfg, {"design_studies": {"s": grid}})
     paths = {}
-    st = designs.studies(cfg)["s"]
+    st = studies(cfg)["s"]
     for p in st.points:
         paths[p.id] = tmp_path / f"{p.id}.nc"
         metadata.write_netcdf(synthetic_run(cfg, "3", end=cfg["time"]["end"]), paths[p.id])

@@ -10,7 +10,7 @@ import numpy as np
 
 from ureterfsi.config.reading import deep_merge, read_yaml
 from ureterfsi.config.validation import load_config_files
-from ureterfsi.designs.space import saltelli_unit_sample, studies
+from ureterfsi.designs.expand import saltelli_unit_sample, studies
 
 REPO = Path(__file__).resolve().parent.parent
 FILES = [REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml", REPO / "config/designs/obstruction_sobol.yaml"]

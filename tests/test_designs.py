@@ -12,7 +12,8 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import ConfigError, load_config
-from ureterfsi.designs.space import point_id, studies
+from ureterfsi.designs.expand import studies
+from ureterfsi.designs.space import point_id
 from ureterfsi.mesh.io import read_msh
 from test_workflow_e2e import e2e_config, job_counts, ok, snakemake
 
@@ -121,7 +122,7 @@ def test_dry_run_of_a_100_point_study(tmp_path):
 def _pretend_done(work: Path, cfg: dict, name: str) -> None:
     """Every output of study `name` (points and, with a rung check, corners) as an empty file, in job order (then
     `snakemake --touch` records them as made by their jobs)."""
-    from ureterfsi.designs.space import corner_run_paths, design_figure_kinds
+    from ureterfsi.designs.expand import corner_run_paths, design_figure_kinds
 
     st = studies(load_config(copy.deepcopy(cfg)))[name]
     every = st.points + (st.check.corners if st.check else [])

@@ -15,7 +15,8 @@ import yaml
 from ureterfsi.designs.space import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
-from ureterfsi.designs.space import corner_run_paths, point_id, studies
+from ureterfsi.designs.expand import corner_run_paths, studies
+from ureterfsi.designs.space import point_id
 from ureterfsi.designs.results import QUANTITIES, rung_check_dataset, study_dataset
 from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import rung_check_metadata
@@ -109,7 +110,7 @@ def test_corners_of_a_50_mm_study_on_the_segment():
     paths = corner_run_paths(st)
     assert paths[ch.corners[0].id] == (f"results/designs/s/rung_check/{ch.corners[0].id}/one_way.nc",
                                        f"results/designs/s/rung_check/{ch.corners[0].id}/fully_coupled.nc")
-    from ureterfsi.designs.space import corner_solve_request
+    from ureterfsi.designs.expand import corner_solve_request
 
     c, ref = corner_solve_request(st, ch.corners[0].id, "fully_coupled")
     assert ref["solver"]["fully_coupled_scheme"] == "partitioned" and c.config["solver"]["fully_coupled_scheme"] == \

@@ -12,7 +12,7 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import ConfigError, load_config
-from ureterfsi.designs.space import saltelli_unit_sample, studies
+from ureterfsi.designs.expand import saltelli_unit_sample, studies
 from ureterfsi.designs.results import SOBOL_INDICES, add_sobol_indices, sobol_indices, study_dataset
 from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import VARIABLES

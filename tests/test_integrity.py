@@ -300,7 +300,7 @@ def test_wall_motion_units(tmp_path):
 def test_design_files_are_checked(tmp_path, run_file, cfg, repo_root, capsys):
     """The design dataset rule read its runs with a bare xarray call (truncated run: OSError in an empty log)
     and the design-figure rules their dataset so; both now go through checked_io and run_script."""
-    from ureterfsi.designs.space import studies
+    from ureterfsi.designs.expand import studies
     from ureterfsi.designs.results import study_dataset
     from ureterfsi.config import load_config
 

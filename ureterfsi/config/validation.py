@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import copy
 
-from ureterfsi.designs import space as designs
+from ureterfsi import REPO_ROOT
+
 from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml
 from .runs import unmakeable
-from .schema import REPO_ROOT
 
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
@@ -17,7 +17,7 @@ def check_study_runs_makeable(cfg: dict) -> None:
     """Every study run (each model at study.level in its symmetry: study.runs, else mesh.symmetry) can be made
     (runs.unmakeable, the rule the dry run applies to a target): a configuration whose own runs cannot be made is
     refused by `config check` too, not only when Snakemake plans them. Not part of check_config: a design point
-    takes its symmetry from its own geometry (designs.point_symmetry), not from mesh.symmetry."""
+    takes its symmetry from its own geometry (designs.space.point_symmetry), not from mesh.symmetry."""
     for model in sorted(cfg["models"], key=int):
         over = cfg["study"]["runs"].get(model, {})
         why = unmakeable(cfg, model, cfg["study"]["level"], over.get("symmetry", cfg["mesh"]["symmetry"]))
@@ -30,7 +30,9 @@ def validate_config(cfg: dict) -> None:
     design studies); raise ConfigError on the first violation."""
     check_config(cfg)
     check_study_runs_makeable(cfg)
-    designs.check_design_studies(cfg)
+    from ureterfsi.designs.expand import check_design_studies   # the designs read this package: imported on use
+
+    check_design_studies(cfg)
 
 
 def load_config(path_or_dict=DEFAULT_CONFIG, overrides: dict | None = None) -> dict:

@@ -1,7 +1,8 @@
 """Design studies: parameter spaces, sampled points, their runs and results.
 
-space       the parameter catalogue, sampling and expansion into runs
+space       the parameter catalogue, a point's values and configuration
+expand      each study's points (grid or sample) and rung-check corners, the design rules' paths and requests
 rung_check  the one-way rung checked against the fully coupled one at chosen points
 results     the design dataset, sensitivities
 """
-__all__ = ["results", "rung_check", "space"]
+__all__ = ["expand", "results", "rung_check", "space"]

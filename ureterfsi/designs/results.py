@@ -13,7 +13,8 @@ import xarray as xr
 
 from ureterfsi.designs import rung_check as rc
 from ureterfsi.data.checked import Contract, open_netcdf
-from ureterfsi.designs.space import Study, base_values, point_id, studies
+from ureterfsi.designs.expand import studies
+from ureterfsi.designs.space import Study, base_values, point_id
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
 from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, rung_check_metadata
 from ureterfsi.data.provenance import provenance_attrs

@@ -3,7 +3,7 @@
 import json
 import sys
 
-from ureterfsi.designs import space as ureter_designs
+from ureterfsi.designs import expand as ureter_designs
 from ureterfsi.config import (
     ConfigError,
     deep_merge,
@@ -353,7 +353,7 @@ def design_dataset_inputs(w):
 
 
 def design_corner_runs(w):
-    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.space.corner_run_paths)."""
+    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.expand.corner_run_paths)."""
     pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()
     return [f for pair in pairs for f in pair]
 

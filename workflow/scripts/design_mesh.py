@@ -1,7 +1,7 @@
 """Snakemake script of rule `design_mesh`: the mesh of one or more design points (ureterfsi.designs.space)."""
 import logging
 
-from ureterfsi.designs.space import mesh_request
+from ureterfsi.designs.expand import mesh_request
 from ureterfsi.mesh.build import build_mesh
 from ureterfsi.workflow.log import run_script
 

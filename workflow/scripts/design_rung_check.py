@@ -3,7 +3,7 @@
 import logging
 
 from ureterfsi.analyses.aggregate import write_dataset
-from ureterfsi.designs.space import corner_run_paths, studies
+from ureterfsi.designs.expand import corner_run_paths, studies
 from ureterfsi.designs.results import rung_check_dataset
 from ureterfsi.workflow.log import run_script
 

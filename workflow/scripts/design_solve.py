@@ -8,7 +8,7 @@ reports; the job succeeds so that the study's other corners and its points are s
 import logging
 
 from ureterfsi.designs.results import write_failed_corner
-from ureterfsi.designs.space import corner_solve_request, studies
+from ureterfsi.designs.expand import corner_solve_request, studies
 from ureterfsi.fsi import SolveFailure
 from ureterfsi.study.cli import solve
 from ureterfsi.study.oneway import MeshMotionRefused

@@ -1,6 +1,6 @@
 """Snakemake script of rule `design_wall_motion`: the r-z wall motion shared by the design points on one wall."""
 
-from ureterfsi.designs.space import wall_config
+from ureterfsi.designs.expand import wall_config
 from ureterfsi.study.oneway import write_wall_motion
 from ureterfsi.workflow.log import run_script
 
