@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 import yaml
 
-from ureterfsi.designs.space import rung_check as rc
+from ureterfsi.designs import rung_check as rc
 from ureterfsi.config import ConfigError, load_config
 from ureterfsi.config.reading import deep_merge
 from ureterfsi.designs.expand import corner_run_paths, studies

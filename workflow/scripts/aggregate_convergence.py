@@ -2,7 +2,7 @@
 -> the mesh-convergence dataset (paper §3.1, Fig. 3; ureterfsi.analyses.aggregate.combine_levels)."""
 import logging
 
-from ureterfsi.analyses.aggregate import combine_levels, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses.aggregate import combine_levels, write_dataset
 from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821

@@ -2,7 +2,7 @@
 dataset with dim `model` (ureterfsi.analyses.aggregate.combine_models)."""
 import logging
 
-from ureterfsi.analyses.aggregate import combine_models, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses.aggregate import combine_models, write_dataset
 from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821

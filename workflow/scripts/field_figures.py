@@ -4,7 +4,6 @@ import logging
 import os
 from pathlib import Path
 
-from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
 from ureterfsi.data import fieldfiles
 from ureterfsi.plotting import fields as plotting_fields
 from ureterfsi.plotting.style import save_figure

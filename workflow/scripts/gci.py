@@ -3,7 +3,7 @@
 (Grid Convergence Index, Celik et al. 2008). Outputs are written atomically."""
 import logging
 
-from ureterfsi.analyses.aggregate import CONVERGENCE_DATASET, write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses.aggregate import CONVERGENCE_DATASET, write_dataset
 from ureterfsi.analyses import gci
 from ureterfsi.data.checked import open_netcdf
 from ureterfsi.workflow.log import run_script

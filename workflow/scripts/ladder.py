@@ -3,7 +3,7 @@ speed-accuracy figure and the rungs' figure quantities over each other (ureterfs
 ureterfsi.plotting.ladder), all written atomically."""
 import logging
 
-from ureterfsi.analyses.aggregate import write_dataset  # first: imports netCDF4 before dolfinx
+from ureterfsi.analyses.aggregate import write_dataset
 from ureterfsi.analyses import ladder
 from ureterfsi.plotting.style import save_figure
 from ureterfsi.plotting.ladder import ladder_overlay, ladder_pareto

@@ -2,7 +2,7 @@
 name; the outputs are written atomically in every configured format (ureterfsi.plotting.paper)."""
 import logging
 
-from ureterfsi import aggregate  # noqa: F401  (first: imports netCDF4 before anything loads dolfinx)
+from ureterfsi.analyses import aggregate
 from ureterfsi.plotting import paper as plotting
 from ureterfsi.plotting.style import save_figure
 from ureterfsi.data.checked import MESH_SIDECAR, open_netcdf, read_json

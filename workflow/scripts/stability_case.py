@@ -2,7 +2,7 @@
 (ureterfsi.stability.run_case; a failing case is a result with its diagnosis, not a failed job)."""
 import logging
 
-from ureterfsi.stability import case_by_name, run_case, write_case  # first: netCDF4 before dolfinx
+from ureterfsi.stability import case_by_name, run_case, write_case
 from ureterfsi.workflow.log import run_script
 
 smk = snakemake  # noqa: F821

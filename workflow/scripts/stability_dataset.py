@@ -2,7 +2,7 @@
 `case`, ureterfsi.stability.combine) and a Markdown table of the outcomes."""
 import logging
 
-from ureterfsi.stability import combine, outcome_table, write_case  # first: netCDF4 before dolfinx
+from ureterfsi.stability import combine, outcome_table, write_case
 from ureterfsi.data.provenance import atomic_path
 from ureterfsi.workflow.log import run_script
 
