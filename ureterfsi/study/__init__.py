@@ -6,7 +6,7 @@ options   RunSpec, the fidelities, the configuration as solver options and time 
 probes    the ureter probes (fluxes, hole flows, wall displacement, stent stress) and the probe dataset
 pipeline  the run sequence every rung shares (mesh, counts, checkpoints, integration, provenance, write)
 coupled   the fully coupled rung (monolithic ALE FSI)
-oneway    the one-way rung: r-z wall -> urine alone -> quasi-static stent
+oneway    the one-way rung: r-z wall -> urine alone -> quasi-static stent (oneway/{wall, urine, stent, rung})
 fields    the run's field files for ParaView (XDMF + HDF5 at the probe times)
 cli       `python -m ureterfsi.study` and the rung dispatch
 calibration  the wall's peak traction against the paper's wall displacement (`python -m ureterfsi.study.calibration`)
