@@ -8,8 +8,9 @@ pipeline  the run sequence every rung shares (mesh, counts, checkpoints, integra
 coupled   the fully coupled rung (monolithic ALE FSI)
 oneway    the one-way rung: r-z wall -> urine alone -> quasi-static stent (oneway/{wall, urine, stent, rung})
 fields    the run's field files for ParaView (XDMF + HDF5 at the probe times)
-cli       `python -m ureterfsi.study` and the rung dispatch
+run       solve: one run on a rung (the rung dispatch)
+cli       `python -m ureterfsi.study`: its arguments, then run.solve
 calibration  the wall's peak traction against the paper's wall displacement (`python -m ureterfsi.study.calibration`)
 """
 
-__all__ = ["calibration", "cli", "coupled", "fields", "oneway", "options", "pipeline", "probes"]
+__all__ = ["calibration", "cli", "coupled", "fields", "oneway", "options", "pipeline", "probes", "run"]

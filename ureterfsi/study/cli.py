@@ -1,5 +1,5 @@
 """The command line of a study run, every rung: `python -m ureterfsi.study --model M --level L --symmetry S
---mesh F --out F [--fidelity one_way --wall F]` (rules solve, ladder_run), and the rung dispatch."""
+--mesh F --out F [--fidelity one_way --wall F]` (rules solve, ladder_run): its arguments, then study.run.solve."""
 from __future__ import annotations
 
 import argparse
@@ -7,22 +7,13 @@ import json
 import logging
 import sys
 
-import xarray as xr
 from mpi4py import MPI
 
 from ureterfsi.data.checked import BadFile
 from ..config import ConfigError, load_config, load_config_files, read_run_config
 from ..fsi import SolveFailure
-from . import coupled, oneway
 from .options import FIDELITIES, RunSpec
-
-
-def solve(cfg: dict, spec: RunSpec, fidelity: str, out_path: str, checkpoint_path: str | None = None,
-          wall_path: str | None = None) -> xr.Dataset:
-    """One run on rung `fidelity` (FIDELITIES); the one-way rung reads the wall motion `wall_path` if given."""
-    if fidelity == "one_way":
-        return oneway.run(cfg, spec, out_path, checkpoint_path, wall_path=wall_path)
-    return coupled.run(cfg, spec, out_path, checkpoint_path)
+from .run import solve
 
 
 def configure_logging(stream=None) -> None:

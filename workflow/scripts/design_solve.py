@@ -1,6 +1,6 @@
 """Snakemake script of rules `design_solve` (one design point on its study's rung) and `design_corner_solve` (a
 corner of the design space on the segment, on the study's rung or fully coupled: ureterfsi.designs.rung_check), through
-ureterfsi.study.cli.solve. A point that cannot be solved (refused before the solve, a step that fails, an inverted
+ureterfsi.study.run.solve. A point that cannot be solved (refused before the solve, a step that fails, an inverted
 mesh) ends in one line naming the point, in the rule's log and in Snakemake's error report
 (ureterfsi.workflow.log.run_script). A corner's solve that fails is recorded instead (a run file holding the
 failure, ureterfsi.designs.results.write_failed_corner): the rung is not checked there, which the study's rung check
@@ -10,7 +10,7 @@ import logging
 from ureterfsi.designs.results import write_failed_corner
 from ureterfsi.designs.expand import corner_solve_request, studies
 from ureterfsi.fsi import SolveFailure
-from ureterfsi.study.cli import solve
+from ureterfsi.study.run import solve
 from ureterfsi.study.oneway import MeshMotionRefused
 from ureterfsi.study.options import RunSpec
 from ureterfsi.workflow.log import run_script
