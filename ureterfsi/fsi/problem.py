@@ -17,12 +17,10 @@ partitioned sweeps (fsi.partitioned), the segregated mesh motion (fsi.mesh_motio
 """
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import time as _time
 import weakref
-from dataclasses import replace
 
 import numpy as np
 import ufl
@@ -37,7 +35,7 @@ from .dofs import DofLayout
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              forget_options, owner_prefix)
 from .materials import MooneyRivlin
-from .mesh_motion import cell_stiffness, segregated_motion
+from .mesh_motion import MeshMotionMethods, cell_stiffness
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
 from .options import SolverOptions
@@ -47,7 +45,7 @@ from .scene import Scene
 log = logging.getLogger("ureterfsi.fsi")
 
 
-class MonolithicFSI:
+class MonolithicFSI(MeshMotionMethods):
     """The problem of a `scene` solved with `options`: its mixed space, state and BDF history, forms, constraints
     and solver strategies; `step(dt)` advances it, `solve_steady()` poses a steady state."""
 
@@ -273,69 +271,6 @@ class MonolithicFSI:
         """The PETSc factor of the (flow block of the) Jacobian, for solver diagnostics."""
         return self.linear_solver.factor_matrix()
 
-    def _setup_mesh_motion(self):
-        """The segregated mesh motion of the scene (mesh_motion.segregated_motion)."""
-        self.mesh_motion = segregated_motion(self.mesh_displacement, self.constraints.mesh, self.scene.mesh_motion,
-                                             self.ops, self.stiffness, self.dx(self.fluid_tags), self.options,
-                                             f"{self.options_prefix}mesh_", self.counters)
-
-    def use_mesh_motion(self, prescribed) -> None:
-        """Swap the segregated mesh motion before a run: a prescribed ALE map (as Scene.mesh_motion) or None (the
-        extension problem); the problem is otherwise the one a scene with that map poses."""
-        if not self.segregated:
-            raise ValueError("use_mesh_motion swaps the segregated mesh motion (mesh_motion_coupling 'segregated')")
-        self.scene = replace(self.scene, mesh_motion=prescribed)
-        self._setup_mesh_motion()
-
-    @property
-    def mesh_motion_solver(self) -> str:
-        """How the segregated mesh motion is found: prescribed, lu or cg_icc."""
-        return self.mesh_motion.name
-
-    @property
-    def mesh_motion_mismatch(self) -> float:
-        """Largest disagreement of a prescribed ALE map with the boundary motion, of the displacement (0 else)."""
-        return self.mesh_motion.mismatch
-
-    def solve_mesh_motion(self):
-        """Mesh displacement of the current time from the prescribed boundary displacement. An iterative solve
-        starts from the linear extrapolation u_n + (dt/dt_prev)(u_n - u_n-1) of the mirrored history in x_n,
-        x_nm1 (which checkpoints hold, so a resumed run starts from the same guess)."""
-        t0 = _time.perf_counter()
-        u_n, u_nm1 = self.x_n.x.array[self._mesh_dofs], self.x_nm1.x.array[self._mesh_dofs]
-        w = float(self.dt.value) / self.dt_prev if self.dt_prev else 0.0
-        self.mesh_motion.solve(float(self.t.value), u_n + w * (u_n - u_nm1))
-        self.timings["mesh_motion"] += _time.perf_counter() - t0
-
-    @contextlib.contextmanager
-    def mesh_motion_preview(self):
-        """A callable t -> the segregated mesh displacement the Dirichlet data of time t give (the run's own map at t,
-        for a prediction before the run); on exit the displacement, the boundary data of the current time and the
-        mesh motion's recorded mismatch are restored."""
-        d, motion = self.mesh_displacement, self.mesh_motion
-        saved, mismatch = d.x.array.copy(), motion.mismatch
-
-        def at(t: float) -> fem.Function:
-            self.constraints.update(t)
-            motion.solve(t, d.x.array.copy())
-            return d
-
-        try:
-            yield at
-        finally:
-            d.x.array[:] = saved
-            motion.mismatch = mismatch
-            self.constraints.update(self.time)
-
-    def min_ale_jacobian(self) -> float:
-        """Minimum det(I + Grad u) over the fluid mesh (1 when undeformed, <= 0 when inverted)."""
-        return 1.0 if self.ale_jacobian is None else self.ale_jacobian.minimum()
-
-    def min_ale_jacobian_at(self):
-        """(minimum ALE Jacobian, reference coordinates (x, y, z) of its fluid vertex), reduced over ranks;
-        a non-finite Jacobian counts as -inf (a scene without fluid: (1, NaN))."""
-        return (1.0, (math.nan,) * 3) if self.ale_jacobian is None else self.ale_jacobian.minimum_at()
-
     # ---------------------------------------------------------------------------------------
     def _assemble_residual(self):
         t0 = _time.perf_counter()
@@ -364,31 +299,6 @@ class MonolithicFSI:
         self._jacobian_valid = True
         self._jacobian_rate = self._rate()
         self.timings["assemble_jacobian"] += _time.perf_counter() - t0
-
-    def assemble_mesh_rows(self, out: PETSc.Vec) -> None:
-        """The mesh-motion rows R_m(x) into `out` (owned entries; the removed rows 0): A_m x for a linear extension
-        (harmonic or elastic, physics.mesh_motion_residual: linear in u without a source, so R_m(x) = A_m x, a
-        product instead of an assembly), else (Jacobian-stiffened) assembled from their form."""
-        if not self.options.mesh_jacobian_stiffening:
-            self.mesh_motion_matrix().mult(self.x.vector, out)
-            return
-        with out.localForm() as loc:
-            loc.set(0.0)
-        fem_petsc.assemble_vector(out, self.mesh_form)
-        out.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        out.array_w[self.constraints.mesh_rows_local] = 0.0
-
-    def mesh_motion_matrix(self) -> PETSc.Mat:
-        """The mesh-motion rows' Jacobian (the interface's and Dirichlet rows removed) at the current state: a linear
-        extension's assembled once, a Jacobian-stiffened one's (mesh_jacobian_stiffening > 0) at every call."""
-        Am = self.Am
-        if not self._mesh_jacobian_ready:
-            Am.zeroEntries()
-            fem_petsc.assemble_matrix(Am, self.mesh_jacobian_form)
-            Am.assemble()
-            Am.zeroRows(self.constraints.mesh_rows, diag=0.0)
-            self._mesh_jacobian_ready = not self.options.mesh_jacobian_stiffening
-        return Am
 
     def _rate(self) -> float:
         """b0/dt, the only time-integration coefficient in the Jacobian (0 in steady solves)."""
