@@ -23,7 +23,7 @@ from ureterfsi.fsi.operators import Operators
 from ureterfsi.fsi.block_factors import BlockFactor
 from ureterfsi.fsi.linear_solvers import Mumps
 from ureterfsi.fsi.block_jacobian import BlockJacobian, field_components, field_space
-from ureterfsi.fsi.partitioned import direct_jacobian, direction
+from ureterfsi.fsi.block_forms import direct_jacobian, direction
 
 TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True)
 

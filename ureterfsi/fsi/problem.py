@@ -39,7 +39,8 @@ from .mesh_motion import MeshMotionMethods, cell_stiffness
 from .newton import Newton, NewtonDivergence
 from .operators import Operators
 from .options import SolverOptions
-from .partitioned import PartitionedCoupling, partitioned_coupling
+from .block_forms import partitioned_coupling
+from .partitioned import PartitionedCoupling
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
@@ -260,7 +261,7 @@ class MonolithicFSI(MeshMotionMethods):
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps())
 
     def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
-        """The partitioned strategy (fsi.partitioned.partitioned_coupling) on the residual's terms `whole` and
+        """The partitioned strategy (fsi.block_forms.partitioned_coupling) on the residual's terms `whole` and
         `terms`(dx, ds), the same terms with other measures."""
         if self.segregated or not self.fluid_tags or not self.solid_tags:
             raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
