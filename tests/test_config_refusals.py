@@ -411,6 +411,8 @@ SHIPPED = [
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/arrangement_offset.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/obstruction_sobol.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml"],
+    ["config/config.yaml", "config/occlusion.yaml"],
+    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/occlusion.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/ladder-mini.yaml",
      "tests/data/ladder-mini-passage.yaml"],
 ]

@@ -37,7 +37,7 @@ from .cli import main
 from .errors import ConfigError
 from .plausible import check_plausible
 from .reading import deep_merge, read_config_args, read_yaml
-from .runs import read_run_config, run_config, unmakeable
+from .runs import one_way_unposable, read_run_config, run_config, unmakeable
 from .sections import RUN_SECTIONS, WALL_GEOMETRY, mesh_sections, run_sections, wall_sections
 from .schema import REPO_ROOT, SCHEMA_PATH, load_schema, schema_defaults
 from .validation import DEFAULT_CONFIG, load_config, load_config_files, validate_config
@@ -49,7 +49,7 @@ __all__ = [
     "check_ladder", "check_levels", "check_mesh_sizes", "check_model_keys", "check_models", "check_peristalsis",
     "check_plausible", "check_resolution", "check_runs", "check_stability", "check_stent_offset", "check_stricture",
     "check_study", "check_symmetry", "check_time", "check_ureter_material", "check_ureter_wall", "deep_merge",
-    "load_config", "load_config_files", "load_schema", "main", "mesh_sections", "read_config_args", "read_run_config",
-    "read_yaml",
+    "load_config", "load_config_files", "load_schema", "main", "mesh_sections", "one_way_unposable",
+    "read_config_args", "read_run_config", "read_yaml",
     "run_config", "run_sections", "schema_defaults", "unmakeable", "validate_config", "wall_sections",
 ]

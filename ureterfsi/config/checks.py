@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
+from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions, occluded_holes
 from ureterfsi.config.ranges import SHEAR_MODULUS
 from ureterfsi.stability.naming import Case
 
@@ -98,6 +98,49 @@ def check_stricture(cfg):
                           f"{fmt(st.fraction)} narrows the lumen to radius {fmt(geo.narrowest_radius)} m, a gap of "
                           f"{fmt(gap)} m to the {what}; need >= geometry.stricture_min_gap {fmt(g['stricture_min_gap'])}"
                           f" x the unobstructed {fmt(open_gap)} m (no contact)")
+
+
+def check_occlusion(cfg):
+    """A complete occlusion (geometry.occlusion_length > 0, ureterfsi.mesh.geometry.Occlusion) and its tapers lie inside
+    the segment, apart from the clamped end faces; it is the only narrowing (no stricture) of a coaxial stent
+    (the wall ties onto it all round). A model it cannot pose (stent-free, or a hole under its span) is refused where
+    its mesh is asked for (runs.unmakeable), the one-way rung by check_occlusion_rungs."""
+    g, geo = cfg["geometry"], _geom(cfg)
+    if not geo.occluded:
+        return
+    lo, hi = geo.occlusion.span
+    if not (lo > 0.0 and hi < g["length"]):
+        raise ConfigError("geometry.occlusion_position",
+                          f"the occlusion with its tapers [{fmt(lo)}, {fmt(hi)}] m (occlusion_position -+ "
+                          f"(occlusion_length/2 + occlusion_taper)) must lie inside the segment (0, {fmt(g['length'])}) "
+                          f"m, "
+                          f"apart from the clamped end faces")
+    if geo.strictured:
+        raise ConfigError("geometry.occlusion_length", "a complete occlusion is the segment's narrowing: set "
+                                                       "geometry.stricture_fraction to 0 (one or the other)")
+    if geo.stent_offset:
+        raise ConfigError("geometry.occlusion_length", f"a complete occlusion ties the wall onto a coaxial stent all "
+                                                       f"round: geometry.stent_offset must be 0, got "
+                                                       f"{fmt(geo.stent_offset)}")
+
+
+def occlusion_unposable(cfg: dict, model: str) -> str:
+    """Why a complete occlusion (geometry.occlusion_length > 0) cannot be posed on `model`, '' if it can (or there
+    is none): a stent-free model (the wall would close the ureter), a side-hole pair under the occlusion's span (the
+    wall closes a hole under the contact; under a taper the hole opens into a wedge thinner than itself)."""
+    geo, sm = UreterGeometry.from_config(cfg), StentModel.from_config(cfg, model)
+    if not geo.occluded:
+        return ""
+    if not sm.stent:
+        return (f"model {model} has no stent: a complete occlusion (geometry.occlusion_length > 0) closes the annulus "
+                f"onto the stent, without one it would close the ureter")
+    z = occluded_holes(geo, sm)
+    if z.size:
+        lo, hi = geo.occlusion.span
+        return (f"model {model}: the side-hole pair at z = {fmt(float(z[0]))} m lies under the occlusion's span "
+                f"[{fmt(lo)}, {fmt(hi)}] m (occlusion_position -+ (occlusion_length/2 + occlusion_taper)); move the "
+                f"occlusion or the holes")
+    return ""
 
 
 def check_stent_offset(cfg):
@@ -318,6 +361,19 @@ def check_runs(cfg):
                                                  "(side holes break rotational symmetry)")
 
 
+def check_occlusion_rungs(cfg):
+    """Under a complete occlusion every stented model's study run is fully coupled: the one-way rung's r-z wall
+    moves freely where the 3D wall is tied to the stent (ureterfsi.study.oneway refuses it too)."""
+    if not cfg["geometry"]["occlusion_length"]:
+        return
+    for name in sorted(cfg["models"], key=int):
+        over = cfg["study"]["runs"].get(name, {})
+        if not occlusion_unposable(cfg, name) and over.get("fidelity", cfg["study"]["fidelity"]) == "one_way":
+            key = f"study.runs.{name}.fidelity" if "fidelity" in over else "study.fidelity"
+            raise ConfigError(key, f"one_way cannot pose the complete occlusion (geometry.occlusion_length > 0) of "
+                                   f"model {name}: its r-z wall ignores the tie to the stent; use fully_coupled")
+
+
 def check_ladder(cfg):
     lad = cfg.get("ladder")
     if lad is None:
@@ -401,17 +457,19 @@ def check_stability(cfg):
 
 CHECKS = (
     check_plausible,
-    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_stent_offset,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_occlusion,
+    check_stent_offset,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
-    check_runs, check_ladder, check_figures, check_stability,
+    check_runs, check_occlusion_rungs, check_ladder, check_figures, check_stability,
 )
 
 
 # the checks that read only the sections of one solve (runs.RUN_SECTIONS and `models`, holding the run's model)
 RUN_CHECKS = (
     check_plausible,
-    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_stent_offset,
+    check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_occlusion,
+    check_stent_offset,
     check_models, check_time, check_mesh_sizes, check_levels, check_resolution, check_fluid_bulk, check_peristalsis,
     check_ureter_material,
 )

@@ -3,16 +3,27 @@ from __future__ import annotations
 
 import json
 
-from .checks import check_run_config
+from .checks import check_run_config, occlusion_unposable
 from .errors import ConfigError, fmt
 from .schema import schema_defaults
 from .sections import RUN_SECTIONS
 
 
+def one_way_unposable(cfg: dict) -> str:
+    """Why the one-way rung cannot pose this configuration, '' if it can: a complete occlusion (its r-z wall ignores
+    the tie to the stent). choice: refused rather than the r-z wall's inner radius pinned there: the blended wall
+    motion would be another problem's."""
+    if cfg["geometry"]["occlusion_length"]:
+        return ("geometry.occlusion_length > 0: the one-way rung cannot pose a complete occlusion (its r-z wall "
+                "ignores the tie to the stent); use fidelity fully_coupled")
+    return ""
+
+
 def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
     """Why the mesh of `model` at `level` in `symmetry` (and so every run on it) cannot be made, '' if it can: a
-    model of `models`, a level of `mesh.levels`, the axisymmetric (r-z) section only of a stent-free model, and no
-    quarter model of an offset stent (geometry.stent_offset breaks the x = 0 mirror plane)."""
+    model of `models`, a level of `mesh.levels`, the axisymmetric (r-z) section only of a stent-free model, no
+    stent-free model under a complete occlusion, and no quarter model of an offset stent (geometry.stent_offset breaks
+    the x = 0 mirror plane)."""
     models, levels = cfg["models"], cfg["mesh"]["levels"]
     if model not in models:
         return f"model {model!r} is not one of models {sorted(models, key=int)}"
@@ -22,6 +33,8 @@ def unmakeable(cfg: dict, model: str, level: str, symmetry: str) -> str:
         free = [m for m in sorted(models, key=int) if not models[m]["stent"]]
         return (f"model {model} has a stent: the axisymmetric (r-z) section is only for the stent-free models "
                 f"{free} (side holes break rotational symmetry)")
+    if occlusion_unposable(cfg, model):
+        return occlusion_unposable(cfg, model)
     if symmetry == "quarter" and models[model]["stent"] and cfg["geometry"]["stent_offset"]:
         return (f"geometry.stent_offset {fmt(cfg['geometry']['stent_offset'])} m breaks the x = 0 mirror plane: "
                 f"model {model} has no quarter model; use symmetry half (y >= 0)")

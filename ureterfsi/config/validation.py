@@ -8,7 +8,7 @@ from ureterfsi import REPO_ROOT
 from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml
-from .runs import unmakeable
+from .runs import occlusion_unposable, unmakeable
 
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
@@ -19,6 +19,8 @@ def check_study_runs_makeable(cfg: dict) -> None:
     refused by `config check` too, not only when Snakemake plans them. Not part of check_config: a design point
     takes its symmetry from its own geometry (designs.space.point_symmetry), not from mesh.symmetry."""
     for model in sorted(cfg["models"], key=int):
+        if occlusion_unposable(cfg, model):
+            continue   # kept in the configuration (model 1 is the stability scene's); its mesh is refused
         over = cfg["study"]["runs"].get(model, {})
         why = unmakeable(cfg, model, cfg["study"]["level"], over.get("symmetry", cfg["mesh"]["symmetry"]))
         if why:

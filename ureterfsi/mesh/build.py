@@ -20,7 +20,7 @@ import numpy as np
 
 from ureterfsi.mesh import tags
 from ureterfsi.mesh.geometry import (SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions,
-                                lumen_area, subdomain_volumes)
+                                lumen_area, occluded_holes, subdomain_volumes)
 from ureterfsi.mesh.io import group_elements, write_msh
 from ureterfsi.mesh.quality import simplex_measure, cell_quality, hole_channels, hole_resolution
 from ureterfsi.data.provenance import provenance_attrs, write_json
@@ -64,6 +64,10 @@ def _request(cfg: dict, model: str, level: str, symmetry: str):
         raise ValueError(f"model {model} has {sm.holes} side holes but no stent")
     if sm.holes % 2:
         raise ValueError(f"model {model}: side holes come in opposite pairs, {sm.holes} is odd")
+    if geom.occluded and not sm.stent:
+        raise ValueError(f"model {model} has no stent: a complete occlusion closes the annulus onto the stent")
+    if occluded_holes(geom, sm).size:
+        raise ValueError(f"model {model}: a side-hole pair lies under the occlusion's span {geom.occlusion.span} m")
     z = hole_pair_positions(geom, sm)
     a = geom.hole_radius
     if sm.holes and a >= geom.stent_inner_radius:
@@ -101,10 +105,62 @@ def _profile_face(geom: UreterGeometry, radius, dim: int) -> int:
     return occ.addPlaneSurface([occ.addCurveLoop(curves)])
 
 
+def _occlusion_profiles(geom: UreterGeometry) -> tuple:
+    """(lumen, outer) profiles of an occluded wall as lists of (r, z) point lists from z = 0 to z = L (each list a
+    line if of two points, else an interpolating spline through STRICTURE_SPLINE_POINTS // 2 + 1 points of a taper,
+    Occlusion.radius). The lumen's tapers go on past the stent's outer radius r_s (which they cross at the contact's
+    ends, inside a spline: a transversal crossing) to the stent's mid-wall radius, and run there under the contact:
+    fused with the stent's outer cylinder, the lumen's surface is r_s over the contact (_solids)."""
+    occ, ri, rs, L = geom.occlusion, geom.ureter_inner_radius, geom.stent_outer_radius, geom.length
+    thick = geom.ureter_outer_radius - ri
+    z0, z1 = occ.contact
+    lo, hi = occ.span
+    r_low = geom.probe_radius
+    s_low = 2.0 / math.pi * math.asin((r_low - rs) / (ri - rs))
+    s = np.linspace(1.0, 0.0, STRICTURE_SPLINE_POINTS // 2 + 1)
+
+    def taper(s, shift):   # upstream taper from s[0] to s[-1], downstream mirrored
+        r = rs + (ri - rs) * np.sin(0.5 * math.pi * s) + shift
+        up = [(float(a), float(z0 - b * occ.taper)) for a, b in zip(r, s)]
+        return up, [(a, z0 + z1 - z) for a, z in reversed(up)]
+
+    def profile(s, shift):
+        up, down = taper(s, shift)
+        return [[(ri + shift, 0.0), up[0]], up, [up[-1], down[0]], down, [down[-1], (ri + shift, L)]]
+
+    return profile(np.r_[s, s_low], 0.0), profile(s, thick)
+
+
+def _segments_face(segments: list) -> int:
+    """OCC plane surface in the x-z plane between the axis and a profile (r, z) given as point lists from z = 0 to
+    z = L (_occlusion_profiles), to be revolved about z."""
+    occ = gmsh.model.occ
+    ends = {}
+
+    def point(r, z):
+        key = (round(r, 15), round(z, 15))
+        if key not in ends:
+            ends[key] = occ.addPoint(r, 0.0, z)
+        return ends[key]
+
+    axis_in, axis_out = occ.addPoint(0.0, 0.0, 0.0), occ.addPoint(0.0, 0.0, segments[-1][-1][1])
+    curves = [occ.addLine(axis_in, point(*segments[0][0]))]
+    for seg in segments:
+        tags_ = [point(*p) for p in seg] if len(seg) == 2 else \
+            [point(*seg[0])] + [occ.addPoint(r, 0.0, z) for r, z in seg[1:-1]] + [point(*seg[-1])]
+        curves.append(occ.addLine(*tags_) if len(seg) == 2 else occ.addSpline(tags_))
+    curves += [occ.addLine(point(*segments[-1][-1]), axis_out), occ.addLine(axis_out, axis_in)]
+    return occ.addPlaneSurface([occ.addCurveLoop(curves)])
+
+
 def _revolved(geom: UreterGeometry, radius) -> list:
     """Solid of revolution about z of the face under r = radius(z), seam at SEAM_ANGLE_Z (as zcyl)."""
+    return _revolve(_profile_face(geom, radius, 3))
+
+
+def _revolve(face: int) -> list:
+    """Solid of revolution about z of an x-z face, seam at SEAM_ANGLE_Z (as zcyl)."""
     occ = gmsh.model.occ
-    face = _profile_face(geom, radius, 3)
     occ.rotate([(2, face)], 0, 0, 0, 0, 0, 1, SEAM_ANGLE_Z)
     return [d for d in occ.revolve([(2, face)], 0, 0, 0, 0, 0, 1, 2 * math.pi) if d[0] == 3]
 
@@ -129,7 +185,11 @@ def _solids(geom: UreterGeometry, sm: StentModel, z_holes: np.ndarray, axes: np.
             box = occ.addBox(0, y0, -0.1 * L, big, big - y0, 1.2 * L)
         return occ.intersect(dimtags, [(3, box)])[0]
 
-    if geom.strictured:
+    if geom.occluded:   # the lumen fused with the stent's outer cylinder: r_s where the wall lies on the stent
+        inner, wall = _occlusion_profiles(geom)
+        outer = keep(_revolve(_segments_face(wall)))
+        lumen = keep(occ.fuse(_revolve(_segments_face(inner)), zcyl(geom.stent_outer_radius))[0])
+    elif geom.strictured:
         outer, lumen = keep(_revolved(geom, geom.outer_radius)), keep(_revolved(geom, geom.inner_radius))
     else:
         outer, lumen = keep(zcyl(geom.ureter_outer_radius)), keep(zcyl(geom.ureter_inner_radius))
@@ -172,9 +232,10 @@ def _facet_groups(regions: dict, dim: int, geom: UreterGeometry) -> dict:
     ends = {tags.FLUID: (tags.INLET, tags.OUTLET), tags.URETER: (tags.URETER_ENDS,) * 2,
             tags.STENT: (tags.STENT_ENDS,) * 2}
     interface = {frozenset((tags.FLUID, tags.URETER)): tags.FLUID_URETER,
-                 frozenset((tags.FLUID, tags.STENT)): tags.FLUID_STENT}
+                 frozenset((tags.FLUID, tags.STENT)): tags.FLUID_STENT,
+                 frozenset((tags.URETER, tags.STENT)): tags.URETER_STENT}
     groups: dict[int, list] = {}
-    box = _sampled_box if geom.strictured else gmsh.model.getBoundingBox
+    box = _sampled_box if geom.strictured or geom.occluded else gmsh.model.getBoundingBox
     for f, cells in owner.items():
         if cells == [tags.FLUID, tags.FLUID]:    # a hole mouth (strictured meshes): inside the fluid, untagged
             continue
@@ -235,7 +296,10 @@ def _size_fields(cfg: dict, geom: UreterGeometry, f: float, hole_walls: list, di
     s = {k: v * f for k, v in s1.items()}
     width = {k: (s1["fluid_bulk"] - v) / GRADING for k, v in s1.items()}
     r = "Sqrt(x^2+y^2)" if dim == 3 else "x"
-    inner = _stricture_expr(geom, "z" if dim == 3 else "y") if geom.strictured else f"{geom.ureter_inner_radius!r}"
+    if geom.occluded:
+        inner = _occlusion_expr(geom)
+    else:
+        inner = _stricture_expr(geom, "z" if dim == 3 else "y") if geom.strictured else f"{geom.ureter_inner_radius!r}"
     fields = [_threshold(_math(f"{inner}-{r}"), s["ureter_wall"], s["fluid_bulk"], 0.0, width["ureter_wall"])]
     if geom.strictured:  # gap / n in the fluid gap, growing by GRADING per unit distance outside it
         rs = geom.stent_outer_radius if hole_walls else 0.0
@@ -266,6 +330,16 @@ def _stricture_expr(geom: UreterGeometry, z: str) -> str:
     a = f"(Abs({z}-{st.position!r})/{0.5 * st.length!r})"
     m = f"(({a}+1-Abs({a}-1))/2)"
     return f"({ri!r}*(1-{st.fraction!r}*0.5*(1+Cos({math.pi!r}*{m}))))"
+
+
+def _occlusion_expr(geom: UreterGeometry) -> str:
+    """gmsh MathEval text of the occluded lumen radius (Occlusion.radius): r_s + (R_i - r_s) sin(pi m / 2),
+    m = min(max((|z - z_o| - l / 2) / t, 0), 1)."""
+    occ, ri, rs = geom.occlusion, geom.ureter_inner_radius, geom.stent_outer_radius
+    a = f"((Abs(z-{occ.position!r})-{0.5 * occ.length!r})/{occ.taper!r})"
+    pos = f"(({a}+Abs({a}))/2)"
+    m = f"(({pos}+1-Abs({pos}-1))/2)"
+    return f"({rs!r}+{ri - rs!r}*Sin({0.5 * math.pi!r}*{m}))"
 
 
 def _hole_walls(stent_vols: list, geom: UreterGeometry) -> list:

@@ -4,7 +4,8 @@ All lengths in metres. The ureter axis is z, inlet (kidney) at z = 0, outlet (bl
 Side holes are radial, in diametrically opposite pairs, all on the y axis (`hole_arrangement: aligned`) or
 alternating between the y and the x axis from pair to pair (`rotated_90`). The stent axis lies on the
 ureter's or displaced along x by `stent_offset`. An optional axisymmetric stricture narrows the
-lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`).
+lumen over a length; the wall keeps its thickness (`UreterGeometry.inner_radius`). A complete occlusion
+(`Occlusion`) closes the annulus onto the stent over a length: the wall's inner surface lies on the stent's outer one.
 """
 from __future__ import annotations
 
@@ -40,6 +41,43 @@ class Stricture:
 
 
 @dataclass(frozen=True)
+class Occlusion:
+    """Complete occlusion (config geometry.occlusion_*): the wall's inner surface lies on the stent's outer surface
+    r_s over `length` centred at `position` (the contact, where wall and stent are tied), reached over `taper` on
+    either side along R(z) = r_s + (R_i - r_s) sin(pi s / 2), s = (|z - z_o| - l / 2) / t clipped to [0, 1]: the
+    wall meets the stent at a finite angle (a wedge of urine, no cusp) and joins the straight wall smoothly."""
+    length: float
+    position: float
+    taper: float
+
+    @classmethod
+    def from_geometry(cls, g: dict) -> "Occlusion | None":
+        """The configured occlusion, None when geometry.occlusion_length is 0."""
+        if not g["occlusion_length"]:
+            return None
+        return cls(g["occlusion_length"], g["occlusion_position"], g["occlusion_taper"])
+
+    @property
+    def contact(self) -> tuple:
+        """(z_o - l / 2, z_o + l / 2): where the wall lies on the stent."""
+        return self.position - 0.5 * self.length, self.position + 0.5 * self.length
+
+    @property
+    def span(self) -> tuple:
+        """(z_o - l / 2 - t, z_o + l / 2 + t): where the wall leaves its straight radius."""
+        return self.position - 0.5 * self.length - self.taper, self.position + 0.5 * self.length + self.taper
+
+    def taper_coordinate(self, z):
+        """s = (|z - z_o| - l / 2) / t, unclipped (< 0 inside the contact)."""
+        return (np.abs(np.asarray(z, dtype=float) - self.position) - 0.5 * self.length) / self.taper
+
+    def radius(self, z, wall_radius: float, stent_radius: float):
+        """R(z) = r_s + (R_i - r_s) sin(pi s / 2), s clipped to [0, 1]."""
+        s = np.clip(self.taper_coordinate(z), 0.0, 1.0)
+        return stent_radius + (wall_radius - stent_radius) * np.sin(0.5 * math.pi * s)
+
+
+@dataclass(frozen=True)
 class UreterGeometry:
     length: float
     ureter_outer_radius: float
@@ -51,6 +89,7 @@ class UreterGeometry:
     stricture: Stricture | None = None
     hole_arrangement: str = "aligned"
     stent_offset: float = 0.0
+    occlusion: Occlusion | None = None
 
     @classmethod
     def from_config(cls, cfg: dict) -> "UreterGeometry":
@@ -68,15 +107,24 @@ class UreterGeometry:
             stricture=Stricture.from_geometry(g),
             hole_arrangement=g["hole_arrangement"],
             stent_offset=g["stent_offset"],
+            occlusion=Occlusion.from_geometry(g),
         )
 
     @property
     def strictured(self) -> bool:
         return self.stricture is not None and self.stricture.fraction > 0.0
 
+    @property
+    def occluded(self) -> bool:
+        return self.occlusion is not None
+
     def radial_shift(self, z):
-        """-R_i f b(z): how far the strictured wall (both surfaces) lies inward of the straight one at z."""
+        """-R_i f b(z): how far the strictured wall (both surfaces) lies inward of the straight one at z;
+        Occlusion.radius(z) - R_i under an occlusion."""
         z = np.asarray(z, dtype=float)
+        if self.occluded:
+            ri = self.ureter_inner_radius
+            return self.occlusion.radius(z, ri, self.stent_outer_radius) - ri
         if not self.strictured:
             return np.zeros_like(z)
         return self.stricture.shift(z, self.ureter_inner_radius)
@@ -171,17 +219,32 @@ def hole_channel_volume(geom: UreterGeometry) -> float:
 
 
 def _axial_integral(geom: UreterGeometry, f) -> float:
-    """int_0^L f(z) dz: exact for a constant f, Gauss-Legendre on each smooth piece of a strictured f."""
-    if not geom.strictured:
+    """int_0^L f(z) dz: exact for a constant f, Gauss-Legendre on each smooth piece of a strictured or occluded f."""
+    if not (geom.strictured or geom.occluded):
         return float(f(np.zeros(1))[0]) * geom.length
-    st = geom.stricture
-    a, b = max(st.position - 0.5 * st.length, 0.0), min(st.position + 0.5 * st.length, geom.length)
+    if geom.occluded:
+        breaks = [*geom.occlusion.span[:1], *geom.occlusion.contact, geom.occlusion.span[1]]
+    else:
+        st = geom.stricture
+        breaks = [st.position - 0.5 * st.length, st.position + 0.5 * st.length]
+    edges = [0.0, *(min(max(z, 0.0), geom.length) for z in breaks), geom.length]
     t, w = np.polynomial.legendre.leggauss(64)
     total = 0.0
-    for lo, hi in ((0.0, a), (a, b), (b, geom.length)):
+    for lo, hi in zip(edges[:-1], edges[1:]):
         if hi > lo:
             total += 0.5 * (hi - lo) * float(np.sum(w * f(lo + 0.5 * (hi - lo) * (t + 1.0))))
     return total
+
+
+def occluded_holes(geom: UreterGeometry, model: StentModel) -> np.ndarray:
+    """Positions of the hole pairs whose mouth (z_k -+ hole radius) meets the occlusion's span (contact and tapers):
+    refused (config.check_occlusion), since the wall closes a hole under the contact and a hole under a taper opens
+    into a wedge of urine thinner than its own diameter."""
+    z = hole_pair_positions(geom, model)
+    if not geom.occluded:
+        return z[:0]
+    lo, hi = geom.occlusion.span
+    return z[(z + geom.hole_radius > lo) & (z - geom.hole_radius < hi)]
 
 
 def lumen_area(geom: UreterGeometry) -> float:

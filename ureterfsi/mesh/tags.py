@@ -21,10 +21,11 @@ FLUID_STENT = 17    # interface fluid / stent (outer wall, lumen wall, hole wall
 SYMMETRY_X = 18     # mirror plane x = 0 (normal along x)
 SYMMETRY_Y = 19     # mirror plane y = 0 (normal along y)
 AXIS = 20           # symmetry axis r = 0 of the axisymmetric (r-z) model
+URETER_STENT = 21   # interface ureter inner wall / stent outer wall under a complete occlusion (tied: shared nodes)
 
 CELL_NAMES = {FLUID: "fluid", URETER: "ureter", STENT: "stent"}
 FACET_NAMES = {
     INLET: "inlet", OUTLET: "outlet", URETER_OUTER: "ureter_outer", URETER_ENDS: "ureter_ends",
     STENT_ENDS: "stent_ends", FLUID_URETER: "fluid_ureter", FLUID_STENT: "fluid_stent",
-    SYMMETRY_X: "symmetry_x", SYMMETRY_Y: "symmetry_y", AXIS: "axis",
+    SYMMETRY_X: "symmetry_x", SYMMETRY_Y: "symmetry_y", AXIS: "axis", URETER_STENT: "ureter_stent",
 }

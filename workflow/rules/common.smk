@@ -9,6 +9,7 @@ from ureterfsi.config import (
     deep_merge,
     mesh_sections,
     read_config_args,
+    one_way_unposable,
     read_yaml,
     run_sections,
     unmakeable,
@@ -204,6 +205,12 @@ def solve_inputs(w):
         "config": run_config_file(w.model),
     }
     if w.fidelity == "one_way":
+        if one_way_unposable(config):  # refused before any job starts, in one line
+            sys.stderr.write(
+                f"target error: results/runs/one_way/{w.symmetry}/model{w.model}_{w.level}.nc: "
+                f"{one_way_unposable(config)}\n"
+            )
+            sys.exit(2)
         inputs["wall"] = WALL_MOTION
     return inputs
 

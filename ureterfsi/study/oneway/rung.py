@@ -9,6 +9,7 @@ import xarray as xr
 from dolfinx import fem
 from mpi4py import MPI
 
+from ureterfsi.config import one_way_unposable
 from ureterfsi.mesh import tags
 from ureterfsi.study.fields import oneway_parts
 from ureterfsi.fsi import Observer, TimeSettings
@@ -32,6 +33,8 @@ def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
     """Step 1 of the rung as a job of its own: the wall over [0, time.end] in steps of time.dt, written
     atomically. Every one-way run of the study reads it (their wall is the same: geometry and load do not
     depend on the stent model or the 3D mesh)."""
+    if one_way_unposable(cfg):
+        raise SystemExit(one_way_unposable(cfg))
     ds = wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"]).to_dataset(cfg)
     write_netcdf(ds, out_path)
     return ds
@@ -104,6 +107,8 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
     wall_motion dataset (write_wall_motion) to read instead of solving the wall."""
     if MPI.COMM_WORLD.size > 1:
         raise SystemExit("the one-way rung runs on one process (fidelity one_way); use fully_coupled under MPI")
+    if one_way_unposable(cfg):
+        raise SystemExit(one_way_unposable(cfg))
     return pipeline.run(cfg, spec, out_path, checkpoint_path, "one_way", partial(pose, cfg, spec, wall_path), wall_path)
 
 
