@@ -3,12 +3,69 @@ from __future__ import annotations
 
 import copy
 import gc
-from pathlib import Path  # noqa: F401
+import time
+from pathlib import Path
 
 import pytest
 
 from ureterfsi import REPO_ROOT   # importing ureterfsi loads netCDF4 before any test imports dolfinx
 from ureterfsi.config import load_config
+
+
+def _rss_bytes() -> tuple[int, int]:
+    """Current and peak resident set size of this process (VmRSS, VmHWM of /proc/self/status), bytes."""
+    fields = {}
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(("VmRSS:", "VmHWM:")):
+                name, kib, _ = line.split()
+                fields[name] = int(kib) * 1024
+    return fields["VmRSS:"], fields["VmHWM:"]
+
+
+def pytest_addoption(parser):
+    parser.addoption("--rss-log", metavar="PATH", default=None,
+                     help="write the resident memory of the pytest process before and after each test, and its "
+                          "growth per test module, to PATH (tab-separated; how docs/performance.md's memory "
+                          "table is measured)")
+
+
+class _RSSLog:
+    """Per-test RSS rows and a per-module summary (growth = RSS after the module's last test minus before its
+    first; peak = the process's high-water mark at the module's end)."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.stream = path.open("w")
+        self.stream.write("test\trss_before_MiB\trss_after_MiB\tgrowth_MiB\tpeak_MiB\tseconds\n")
+        self.modules: dict[str, list[float]] = {}
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(self, item, nextitem):
+        before, _ = _rss_bytes()
+        start = time.perf_counter()
+        yield
+        after, peak = _rss_bytes()
+        seconds = time.perf_counter() - start
+        mib = 1024 ** 2
+        self.stream.write(f"{item.nodeid}\t{before / mib:.0f}\t{after / mib:.0f}\t{(after - before) / mib:.0f}"
+                          f"\t{peak / mib:.0f}\t{seconds:.1f}\n")
+        self.stream.flush()
+        module = self.modules.setdefault(item.location[0], [before / mib, after / mib, peak / mib, 0.0])
+        module[1:] = [after / mib, peak / mib, module[3] + seconds]
+
+    def pytest_sessionfinish(self):
+        self.stream.write("\nmodule\trss_before_MiB\trss_after_MiB\tgrowth_MiB\tpeak_MiB\tseconds\n")
+        for name, (before, after, peak, seconds) in self.modules.items():
+            self.stream.write(f"{name}\t{before:.0f}\t{after:.0f}\t{after - before:.0f}\t{peak:.0f}"
+                              f"\t{seconds:.0f}\n")
+        self.stream.close()
+
+
+def pytest_configure(config):
+    path = config.getoption("--rss-log")
+    if path:
+        config.pluginmanager.register(_RSSLog(Path(path)), "rss-log")
 
 
 @pytest.fixture(autouse=True, scope="module")
