@@ -47,7 +47,9 @@ class DofLayout:
         marker.x.array[np.asarray(local_dofs, dtype=np.int64)] = 1.0
         vec = marker.vector
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return np.flatnonzero(vec.array_r > 0.0).astype(np.int32)
+        owned = np.flatnonzero(vec.array_r > 0.0).astype(np.int32)
+        vec.destroy()           # else kept in its communicator's garbage (fsi.release)
+        return owned
 
     def coupled_splits(self, solid_cells: np.ndarray, pins: list, dirichlet: list) -> dict:
         """Owned local dofs of the splits of the coupled Newton system (linear_solvers.BlockGaussSeidel,

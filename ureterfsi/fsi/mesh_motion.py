@@ -31,6 +31,7 @@ def cell_stiffness(mesh, cells: np.ndarray, exponent: float) -> fem.Function:
     cells = cells[cells < mesh.topology.index_map(mesh.topology.dim).size_local]
     dofs = Q.dofmap.list.array[cells]          # one DG0 dof per cell, through the dofmap
     local = vol.array[dofs]
+    vol.destroy()               # else kept in its communicator's garbage (fsi.release)
     total = mesh.comm.allreduce(local.sum(), MPI.SUM)
     count = mesh.comm.allreduce(local.size, MPI.SUM)
     vmean = total / max(count, 1)

@@ -41,6 +41,7 @@ from .operators import Operators
 from .options import SolverOptions
 from .block_forms import partitioned_coupling
 from .partitioned import PartitionedCoupling
+from .release import collect_garbage, destroy_held
 from .scene import Scene
 
 log = logging.getLogger("ureterfsi.fsi")
@@ -194,6 +195,31 @@ class MonolithicFSI(MeshMotionMethods):
         self._jacobian_valid = False
         # det(I + Grad u) at the fluid cells' vertices: the inversion guard
         self.ale_jacobian = ALEJacobian(ops, u, self.cells(fluid_tags)) if fluid_tags else None
+
+    closed = False
+
+    def close(self) -> None:
+        """Destroy the problem's PETSc objects (matrices, vectors, KSPs and their LU factors, index sets: those of its
+        solver strategies and mesh motion included), those Python has dropped on its communicator, and its PETSc
+        options; the problem is unusable after. Collective. Also on leaving a `with` block."""
+        if self.closed:
+            return
+        self.closed = True
+        destroy_held(self)
+        forget_options(self.options_prefix)
+        collect_garbage(self.comm)
+
+    def __enter__(self) -> MonolithicFSI:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self):
+        # one process closes a dropped problem here; on several, close() it (destruction is collective, Python's
+        # collection is not): see fsi.release
+        if getattr(self, "options_prefix", None) and self.comm.size == 1:
+            self.close()
 
     # ---------------------------------------------------------------------------------------
     @property
