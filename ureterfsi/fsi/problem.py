@@ -426,6 +426,7 @@ class MonolithicFSI(MeshMotionMethods):
         self._sync_history()
         self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
         self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
+        collect_garbage(self.comm)      # the step's temporary PETSc objects (fsi.release)
         return its, history
 
     def time_derivative(self, dofs=slice(None)) -> np.ndarray:

@@ -14,6 +14,7 @@ from mpi4py import MPI
 from ureterfsi.study.fields import field_writer
 from ..fsi import TimeIntegrator, TimeSettings
 from ..fsi.problem import MonolithicFSI
+from ..fsi.release import destroy_held
 from ureterfsi.mesh.io import load_mesh
 from ureterfsi.data.cf import write_netcdf
 from .options import RunSpec, time_settings
@@ -89,4 +90,6 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
     comm.Barrier()
     integrator.remove_checkpoint()
     log.info("done in %.1f s -> %s%s", wall, out_path, posed.summary())
+    pb.close()
+    destroy_held(posed)         # the rung's own solvers (the one-way stent's LU) and probes
     return ds
