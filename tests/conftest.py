@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import copy
+import ctypes
 import gc
 import time
 from pathlib import Path
@@ -10,6 +11,8 @@ import pytest
 
 from ureterfsi import REPO_ROOT   # importing ureterfsi loads netCDF4 before any test imports dolfinx
 from ureterfsi.config import load_config
+
+LIBC = ctypes.CDLL(None)     # this process's C library (glibc)
 
 
 def _rss_bytes() -> tuple[int, int]:
@@ -39,6 +42,7 @@ class _RSSLog:
         self.stream = path.open("w")
         self.stream.write("test\trss_before_MiB\trss_after_MiB\tgrowth_MiB\tpeak_MiB\tseconds\n")
         self.modules: dict[str, list[float]] = {}
+        self.trimmed: dict[str, float] = {}      # {module: MiB malloc_trim gave back at its end}
 
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item, nextitem):
@@ -55,10 +59,10 @@ class _RSSLog:
         module[1:] = [after / mib, peak / mib, module[3] + seconds]
 
     def pytest_sessionfinish(self):
-        self.stream.write("\nmodule\trss_before_MiB\trss_after_MiB\tgrowth_MiB\tpeak_MiB\tseconds\n")
+        self.stream.write("\nmodule\trss_before_MiB\trss_after_MiB\tgrowth_MiB\tpeak_MiB\tseconds\ttrimmed_MiB\n")
         for name, (before, after, peak, seconds) in self.modules.items():
             self.stream.write(f"{name}\t{before:.0f}\t{after:.0f}\t{after - before:.0f}\t{peak:.0f}"
-                              f"\t{seconds:.0f}\n")
+                              f"\t{seconds:.0f}\t{self.trimmed.get(name, 0.0):.0f}\n")
         self.stream.close()
 
 
@@ -69,12 +73,17 @@ def pytest_configure(config):
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _collect_solvers():
-    """Collect each test module's garbage when it ends: problems hold PETSc matrices and MUMPS factors in
-    reference cycles (weakref finalizers, UFL forms) that Python's own collector, blind to their size, keeps
-    for long (the suite's process reached 13 GB without it)."""
+def _collect_solvers(request):
+    """Collect each test module's garbage when it ends (problems of the partitioned scheme are reference cycles,
+    closed when collected: fsi.release) and give the heap's free pages back to the system (glibc's malloc_trim);
+    the memory given back is logged with --rss-log."""
     yield
     gc.collect()
+    before = _rss_bytes()[0]
+    LIBC.malloc_trim(0)
+    log = request.config.pluginmanager.get_plugin("rss-log")
+    if log is not None:
+        log.trimmed[request.node.nodeid] = (before - _rss_bytes()[0]) / 1024 ** 2
 
 
 @pytest.fixture(scope="session")

@@ -28,7 +28,9 @@ def _run(linear_solver, steps=4, dt=2e-3, **options):
 
 @pytest.fixture(scope="module")
 def lu_run():
-    return _run("mumps")
+    pb, histories = _run("mumps")
+    with pb:
+        yield pb, histories
 
 
 def test_same_newton_iterates_and_solution_as_the_whole_system_lu(lu_run):

@@ -15,7 +15,8 @@ CONFIG_TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10)
 
 @pytest.fixture(scope="module")
 def reference():
-    return tube_reference()
+    with tube_reference() as pb:
+        yield pb
 
 
 @pytest.mark.parametrize("field_rtol", [1e-6, 1e-8])

@@ -30,7 +30,8 @@ TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jac
 
 @pytest.fixture(scope="module")
 def reference():
-    return tube_reference()
+    with tube_reference() as pb:
+        yield pb
 
 
 @pytest.mark.parametrize("field_rtol", [1e-6, 1e-8])
@@ -305,8 +306,9 @@ def test_a_failed_block_factorisation_names_the_block_and_mumps_status():
 
 @pytest.fixture(scope="module")
 def reference_8_steps():
-    return tube_run(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20,
-                    newton_stol=1e-13, newton_max_iterations=40, steps=8)[0]
+    with tube_run(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20,
+                  newton_stol=1e-13, newton_max_iterations=40, steps=8)[0] as pb:
+        yield pb
 
 
 def test_mixing_with_earlier_steps_differences_saves_sweeps(reference_8_steps):
