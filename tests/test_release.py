@@ -1,7 +1,7 @@
 """A released problem leaves neither PETSc objects nor memory behind (fsi.release, MonolithicFSI.close).
 
 tests/release_driver.py builds, steps and releases a tube problem ten times (whole-system LU, partitioned and
-block Gauss-Seidel strategies in turn, ~50 000 unknowns, ~75 MiB of matrices and factors each) in a process of
+block Gauss-Seidel strategies in turn, 38 033 unknowns, ~75 MiB of matrices and factors each) in a process of
 its own, reading PETSc's live objects per class from PETSc's log after each: they and the resident memory must
 stay flat. Before close() and the garbage collection of fsi.release, every problem left its matrices, KSPs and
 LU factors alive (petsc4py 3.18 stashes what Python collects in the communicator's garbage) and the process grew
