@@ -200,12 +200,12 @@ class MonolithicFSI(MeshMotionMethods):
 
     def close(self) -> None:
         """Destroy the problem's PETSc objects (matrices, vectors, KSPs and their LU factors, index sets: those of its
-        solver strategies and mesh motion included), those Python has dropped on its communicator, and its PETSc
-        options; the problem is unusable after. Collective. Also on leaving a `with` block."""
+        solver strategies and mesh motion included; not its scene's), those Python has dropped on its communicator,
+        and its PETSc options; the problem is unusable after. Collective. Also on leaving a `with` block."""
         if self.closed:
             return
         self.closed = True
-        destroy_held(self)
+        destroy_held(self, keep=(self.scene,))
         forget_options(self.options_prefix)
         collect_garbage(self.comm)
 

@@ -13,12 +13,12 @@ from petsc4py import PETSc
 PACKAGE = __name__.split(".")[0]
 
 
-def destroy_held(owner: object) -> int:
+def destroy_held(owner: object, keep=()) -> None:
     """Destroy every PETSc object reachable from `owner` through the attributes of engine objects (instances of
     classes defined in this package) and the dicts, lists and tuples among them, and the PETSc vectors of the
-    dolfinx functions found there (their arrays stay readable); returns how many. Other objects of other libraries
-    (forms, meshes) are not entered."""
-    seen, stack, destroyed = set(), [owner], 0
+    dolfinx functions found there (their arrays stay readable). Other objects of other libraries
+    (forms, meshes) are not entered, nor the objects in `keep` (what the owner was given, e.g. a scene)."""
+    seen, stack = {id(k) for k in keep}, [owner]
     while stack:
         obj = stack.pop()
         if id(obj) in seen:
@@ -27,7 +27,6 @@ def destroy_held(owner: object) -> int:
         if isinstance(obj, PETSc.Object):
             if obj.handle and not PETSc.Sys.isFinalized():
                 obj.destroy()
-                destroyed += 1
         elif isinstance(obj, fem.Function):
             stack.append(obj.vector)
         elif isinstance(obj, dict):
@@ -36,7 +35,6 @@ def destroy_held(owner: object) -> int:
             stack.extend(obj)
         elif type(obj).__module__.split(".")[0] == PACKAGE and hasattr(obj, "__dict__"):
             stack.extend(vars(obj).values())
-    return destroyed
 
 
 def collect_garbage(comm) -> None:
