@@ -18,19 +18,20 @@ class ResidualTerms:
     loads: object       # dead and follower surface loads, body forces (0 without any)
 
 
-def residual_terms(ops, scene, fields: dict, tests: dict, dvdt, dudt, t, dx, ds) -> ResidualTerms:
+def residual_terms(ops, scene, fields: dict, tests: dict, dvdt, dudt, t, dx, ds, convecting=None) -> ResidualTerms:
     """The terms of the residual in `fields` (UFL parts of the state), `tests` (of the test function), the BDF
-    rates dv/dt, du/dt, time t, with the cell and facet measures dx, ds (subdomain data: the scene's tags)."""
+    rates dv/dt, du/dt, time t, with the cell and facet measures dx, ds (subdomain data: the scene's tags);
+    `convecting`: the urine's convecting velocity if not its own (physics.fluid_ale_residual)."""
     v, u = fields["velocity"], fields["displacement"]
     phi, psi = tests["velocity"], tests["displacement"]
     urine = 0
     if scene.fluid:
         fl, tags = scene.fluid.material, tuple(scene.fluid.tags)
         urine += physics.fluid_ale_residual(ops, fl, v, fields["pressure"], u, dvdt, dudt, phi, tests["pressure"],
-                                            dx(tags))
+                                            dx(tags), convecting)
         for ob in scene.open_boundaries:
             urine += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt, phi,
-                                                    ds(tuple(ob.tags)))
+                                                    ds(tuple(ob.tags)), convecting)
     solids = 0
     for solid in scene.solids:
         mat, dxs = solid.material, dx(tuple(solid.tags))

@@ -9,7 +9,7 @@ from .linear_solvers import MUMPS_WORKSPACE_PERCENT, Mumps
 CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
            "solid_block": ("condensed", "whole"), "coupling_scheme": ("monolithic", "partitioned"),
            "sweep_convergence": ("contraction", "residual"), "krylov_forcing": ("fixed", "eisenstat_walker"),
-           "jacobian_sparsity": ("couplings", "mixed_element")}
+           "jacobian_sparsity": ("couplings", "mixed_element"), "urine_step": ("newton", "linearly_implicit")}
 
 
 @dataclass
@@ -70,6 +70,9 @@ class SolverOptions:
     # is a linear problem of its own (factorised once) solved before each step, and the Newton system
     # holds velocity and pressure only (no shape derivatives, a much cheaper Jacobian).
     mesh_motion_coupling: str = "monolithic"
+    # a fluid-alone step (segregated): "newton" on the full residual, or "linearly_implicit": BDF2 with the convecting
+    # velocity extrapolated, one linear system per step (fsi.linearly_implicit; Newton its fallback)
+    urine_step: str = "newton"
     # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
     # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
     coupling_scheme: str = "monolithic"

@@ -25,26 +25,29 @@ def fluid_cauchy_stress(ops, fluid: NewtonianFluid, v, p, F):
     return -p * ops.identity() + fluid.dynamic_viscosity * (grad_x_v + grad_x_v.T)
 
 
-def fluid_ale_residual(ops, fluid: NewtonianFluid, v, p, u, dvdt, w, phi, q, dx):
+def fluid_ale_residual(ops, fluid: NewtonianFluid, v, p, u, dvdt, w, phi, q, dx, convecting=None):
     """Incompressible Navier-Stokes in ALE form on the reference fluid domain (paper eqs. 1-3).
 
-    int J rho (dv/dt|_X + grad_x v (v - w)) . phi + J sigma_f F^-T : Grad phi + J tr(grad_x v) q
+    int J rho (dv/dt|_X + grad_x v (c - w)) . phi + J sigma_f F^-T : Grad phi + J tr(grad_x v) q
+
+    with the convecting velocity c = v, or a given `convecting` one (a linearly implicit step: c extrapolated from
+    the previous steps makes the residual linear in v, p).
     """
     F = deformation_gradient(ops, u)
     J = ufl.det(F)
     Finv = ufl.inv(F)
-    V, W, PHI = ops.vec(v), ops.vec(w), ops.vec(phi)
+    C, W, PHI = ops.vec(v if convecting is None else convecting), ops.vec(w), ops.vec(phi)
     grad_x_v = ops.grad(v) * Finv
     sigma = fluid_cauchy_stress(ops, fluid, v, p, F)
-    momentum = (J * fluid.density * ufl.dot(ops.vec(dvdt) + grad_x_v * (V - W), PHI)
+    momentum = (J * fluid.density * ufl.dot(ops.vec(dvdt) + grad_x_v * (C - W), PHI)
                 + J * ufl.inner(sigma * Finv.T, ops.grad(phi)))
     continuity = J * ufl.tr(grad_x_v) * q
     return (momentum + continuity) * ops.weight * dx
 
 
-def open_boundary_residual(ops, fluid: NewtonianFluid, normal_stress, backflow, v, u, w, phi, ds):
+def open_boundary_residual(ops, fluid: NewtonianFluid, normal_stress, backflow, v, u, w, phi, ds, convecting=None):
     """Open boundary sigma n = -f0 n (paper eq. 5) plus directional backflow stabilisation
-    -beta rho/2 min((v-w).n, 0) v (energy-stable for reversed flow; beta = 0 disables)."""
+    -beta rho/2 min((c-w).n, 0) v (energy-stable for reversed flow; beta = 0 disables), c = v or `convecting`."""
     F = deformation_gradient(ops, u)
     J = ufl.det(F)
     N = ops.normal()
@@ -52,7 +55,7 @@ def open_boundary_residual(ops, fluid: NewtonianFluid, normal_stress, backflow, 
     V, PHI = ops.vec(v), ops.vec(phi)
     form = normal_stress * ufl.dot(n_da, PHI)
     if backflow:
-        vn = ufl.dot(V - ops.vec(w), n_da)
+        vn = ufl.dot(ops.vec(v if convecting is None else convecting) - ops.vec(w), n_da)
         form += -backflow * 0.5 * fluid.density * 0.5 * (vn - abs(vn)) * ufl.dot(V, PHI)
     return form * ops.weight * ds
 

@@ -32,6 +32,7 @@ from . import forms, physics, sparsity
 from .ale_jacobian import ALEJacobian
 from .constraints import Constraints
 from .dofs import DofLayout
+from .linearly_implicit import LinearlyImplicitStep
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              forget_options, owner_prefix)
 from .materials import MooneyRivlin
@@ -135,8 +136,8 @@ class MonolithicFSI(MeshMotionMethods):
         self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
 
         # --- residual -----------------------------------------------------------------------
-        def terms(dx, ds=ds):
-            return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds)
+        def terms(dx, ds=ds, convecting=None):
+            return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds, convecting)
 
         whole = terms(dx)
         R = whole.urine + whole.solids + whole.loads
@@ -195,6 +196,8 @@ class MonolithicFSI(MeshMotionMethods):
         self._jacobian_valid = False
         # det(I + Grad u) at the fluid cells' vertices: the inversion guard
         self.ale_jacobian = ALEJacobian(ops, u, self.cells(fluid_tags)) if fluid_tags else None
+        self.linearly_implicit = (LinearlyImplicitStep(self, terms) if opts.urine_step == "linearly_implicit"
+                                  else None)
 
     closed = False
 
@@ -336,6 +339,10 @@ class MonolithicFSI(MeshMotionMethods):
         or one of another step size or BDF order would be reused for a different operator."""
         return self._jacobian_valid and math.isclose(self._jacobian_rate, self._rate(), rel_tol=1e-12)
 
+    def jacobian_kept(self) -> bool:
+        """A factorisation is kept (of any b0/dt: as a preconditioner, fsi.linearly_implicit)."""
+        return self._jacobian_valid
+
     def invalidate_jacobian(self):
         """Force a fresh Jacobian and factorisation (of every block) at the next Newton iteration."""
         self._jacobian_valid = False
@@ -372,9 +379,23 @@ class MonolithicFSI(MeshMotionMethods):
         self._reaction_ready = False
         fem_petsc.set_bc(self.x.vector, self.bcs)
         self.x.x.scatter_forward()
+        self._guess = self.x.x.array.copy() if self.linearly_implicit is not None else None
         if self.partitioned is not None:
             return self.partitioned.solve()
-        return self.nonlinear_solver.solve(self._assemble_residual, self._jacobian_current, self._newton_correction)
+        solve = lambda: self.nonlinear_solver.solve(self._assemble_residual, self._jacobian_current,  # noqa: E731
+                                                    self._newton_correction)
+        if self.linearly_implicit is not None and self._rate():
+            try:
+                with self.linearly_implicit.posed():
+                    return self.linearly_implicit.solve()
+            except NewtonDivergence as err:
+                # the fallback: Newton on the full residual, from the state before the failed solve
+                self.linearly_implicit.fallbacks += 1
+                log.info("linearly implicit step failed (%s); solved by Newton", err)
+                self.invalidate_jacobian()
+                self.x.x.array[:] = self._guess
+                self.x.x.scatter_forward()
+        return solve()
 
     # ---------------------------------------------------------------------------------------
     def set_bdf(self, dt):
@@ -403,6 +424,8 @@ class MonolithicFSI(MeshMotionMethods):
         self.constraints.update(t_new)
         if self.segregated:
             self.solve_mesh_motion()
+        if self.linearly_implicit is not None:
+            self.linearly_implicit.extrapolate(dt)
         guesses = [self.options.predictor] + (["constant"] if self.options.predictor != "constant" else [])
         for k, guess in enumerate(guesses):
             self._predict(guess, dt)
