@@ -12,6 +12,7 @@ import matplotlib
 import numpy as np
 import pytest
 import xarray as xr
+from mpi4py import MPI
 
 from ureterfsi.analyses import aggregate
 from ureterfsi.plotting import paper as plotting
@@ -23,9 +24,27 @@ from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positi
 from ureterfsi.data.cf import VARIABLES as CF
 from ureterfsi.study.options import RunSpec
 from ureterfsi.study.probes import N_HOLE, N_LINE, UreterProbes, probes_dataset
+from ureterfsi.study.stent_surface import StentSurface
+from ureterfsi.fsi.wall_shear import WallShearHistory
 
 FLUX_AMPLITUDE = 1e-8         # m^3/s
 VM_BASE = 5e3                 # Pa
+
+
+class _SyntheticSurface(StentSurface):
+    """Stand-in for StentSurface: one unit of unit area per region, a shear stress along z that reverses in the lumen."""
+
+    def __init__(self, cfg, holes, times):
+        self.names = ["outer", "lumen"] + [f"hole_{k}" for k in range(holes)]
+        self.wss = SimpleNamespace(region=np.arange(len(self.names)))
+        self.history = WallShearHistory(len(self.names))
+        for ti in times:
+            tau = np.zeros((len(self.names), 3))
+            tau[:, 2] = 0.05 * (1 + np.arange(len(self.names)) / 4)
+            tau[1, 2] = 0.05 * np.sin(2 * np.pi * ti / 3)
+            self.history.add(ti, tau, np.ones(len(self.names)))
+        sc = cfg["stent_surface"]
+        self.threshold, self.active_fraction = sc["low_wss_threshold"], sc["active_hole_fraction"]
 
 
 class _SyntheticProbes:
@@ -67,6 +86,13 @@ class _SyntheticProbes:
             self.series["stent_max_von_mises_z"] = list(np.clip(zc, 0, g.length))
             self.series["hole_flux"] = [[1e-10 * np.sin(2 * np.pi * (ti - zk / 0.02) / 3) for zk, _, _ in self.holes]
                                         for ti in t]
+            self.series["hole_gross_exchange"] = [[1.2 * abs(q) for q in row] for row in self.series["hole_flux"]]
+            self.surface = _SyntheticSurface(cfg, len(self.holes), t)
+            self.comm = MPI.COMM_WORLD
+            wss = {name: 0.05 * (1 + 0.5 * np.sin(2 * np.pi * t / 3) + 0.1 * k) for name in self.surface.names}
+            self.series["stent_outer_wss"] = list(wss["outer"])
+            self.series["stent_lumen_wss"] = list(0.5 * wss["lumen"])
+            self.series["hole_wall_wss"] = np.array([wss[n] for n in self.surface.names[2:]]).T.tolist()
             for end in ("outlet", "inlet"):
                 self.series[f"{end}_lumen_flux"] = list(1e-2 * np.asarray(self.series[f"{end}_flux"]))
             a = g.hole_radius

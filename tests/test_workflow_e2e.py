@@ -46,7 +46,7 @@ MPI_LAUNCHER = "mpiexec --allow-run-as-root --oversubscribe"
 
 FIGURES = ["fig02_domain", "fig03_mesh_convergence", "fig04_outlet_flow", "fig05_wall_displacement",
            "fig06_hole_velocity", "fig07_hole_velocity", "fig08_hole_velocity", "fig09_hole_velocity",
-           "fig10_stent_von_mises", "fig11_hole_flux", "field_hole_flow", "field_pressure"]
+           "fig10_stent_von_mises", "fig11_hole_flux", "field_hole_flow", "field_stent_wss", "field_pressure"]
 FIGURE_RULES = set(FIGURES) | {"table1", "all_figures", "all_field_figures", "all"}
 HEAVY_RULES = ("mesh", "solve")
 SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement",

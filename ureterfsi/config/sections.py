@@ -7,7 +7,8 @@ WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "st
                  "stricture_position")
 
 
-RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields")
+RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields",
+                "stent_surface")
 
 
 def run_sections(cfg: dict, model: str) -> dict:

@@ -48,6 +48,26 @@ VARIABLES = {
     "stent_max_von_mises_y": ("m", "y of the maximum stent von Mises stress (reference configuration)"),
     "stent_max_von_mises_z": ("m", "z of the maximum stent von Mises stress (reference configuration)"),
     "hole_flux": ("m3 s-1", "volumetric flow rate through each side hole, positive from the stent lumen outward"),
+    "hole_gross_exchange": ("m3 s-1", "gross exchange through each side hole, the mean over the hole channel's sections "
+                                      "R = const of the integral of |u.n| (= |hole_flux| for a one-way flow)"),
+    "hole_gross_exchange_volume": ("m3", "integral over time of the gross exchange through each side hole"),
+    "hole_net_volume": ("m3", "integral over time of the volumetric flow rate through each side hole, positive from "
+                              "the stent lumen outward"),
+    "hole_active": ("1", "1 if the side hole's gross exchange volume exceeds active_hole_fraction times the mean "
+                         "over the holes (an active hole), else 0"),
+    "active_hole_fraction": ("1", "a hole is active when its gross exchange volume exceeds this times the mean over "
+                                  "the holes (stent_surface.active_hole_fraction)"),
+    "low_wss_threshold": ("Pa", "time-averaged wall shear stress below which a stent surface counts as low-shear "
+                                "(stent_surface.low_wss_threshold)"),
+    **{f"{region}_{key}": (units, f"{what} on {where}")
+       for region, where in (("stent_outer", "the stent's outer surface"), ("stent_lumen", "the stent's lumen"),
+                             ("hole_wall", "the wall of each side hole"))
+       for key, units, what in (
+           ("wss", "Pa", "area-mean wall shear stress |sigma_f n - (n.sigma_f n) n| (current configuration)"),
+           ("tawss", "Pa", "area-mean time-averaged wall shear stress (1/T) integral |tau_w| dt"),
+           ("osi", "1", "area-mean oscillatory shear index 1/2 (1 - |integral tau_w dt| / integral |tau_w| dt)"),
+           ("low_wss_area_fraction", "1", "area fraction whose time-averaged wall shear stress is below "
+                                          "low_wss_threshold"))},
     "outlet_lumen_flux": ("m3 s-1", "volumetric flow rate through the outlet inside the stent lumen, positive out of "
                                     "the ureter"),
     "inlet_lumen_flux": ("m3 s-1", "volumetric flow rate through the inlet inside the stent lumen, positive into the "
@@ -191,6 +211,8 @@ FIELD_VARIABLES = {
     "pressure": ("Pa", "urine pressure"),
     "displacement": ("m", "displacement: solid in the ureter wall and the stent, ALE mesh displacement in the urine"),
     "von_mises": ("Pa", "stent von Mises stress, cell mean"),
+    "wall_shear_stress": ("Pa", "wall shear stress on the stent, the mean over each urine cell's stent facets, NaN on "
+                                "the cells off the stent"),
     "subdomain": ("1", "cell tag of the subdomain (ureterfsi.mesh.tags: urine 1, ureter wall 2, stent 3)"),
     "time": ("s", "simulated time of the snapshot"),
 }

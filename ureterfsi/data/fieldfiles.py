@@ -173,3 +173,26 @@ def pressure_lines(fs: FieldSet, times, geom, n: int = 300) -> dict:
     return {label: (z, np.array([sample(fs, "pressure", t, np.c_[np.full_like(z, r), np.zeros_like(z), z],
                                         cells=urine)[:, 0] for t in times]))
             for label, r in radii.items()}
+
+
+@dataclass
+class StentWallShear:
+    """The stent's wall shear stress (Pa) from the field files at each of `times`: per urine cell beside the stent
+    within half_width of the hole, its centroid's angle around the stent axis (rad), z (m) and radius (m)."""
+    theta: np.ndarray
+    z: np.ndarray
+    radius: np.ndarray
+    times: list
+    values: list
+
+
+def stent_wall_shear(fs: FieldSet, times, hole_z: float, geom, half_width: float = 2.0e-3) -> StentWallShear:
+    """The `wall_shear_stress` cell field of the urine cells beside the stent (finite values) within |z - hole_z| <=
+    half_width, reference centroids: angle from the x axis around the stent axis (x = stent_offset, y = 0)."""
+    centroid = fs.points[fs.cells].mean(axis=1)
+    first = fs.values("wall_shear_stress", float(times[0]))[:, 0]
+    keep = np.isfinite(first) & (np.abs(centroid[:, 2] - hole_z) <= half_width)
+    c = centroid[keep]
+    return StentWallShear(np.arctan2(c[:, 1], c[:, 0] - geom.stent_offset), c[:, 2],
+                          np.hypot(c[:, 0] - geom.stent_offset, c[:, 1]), [float(t) for t in times],
+                          [fs.values("wall_shear_stress", float(t))[keep, 0] for t in times])

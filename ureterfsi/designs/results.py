@@ -1,5 +1,6 @@
 """The results of a design study (ureterfsi.designs.space): each point's scalars from its run (peak and mean outlet flow,
-backflow volume, hole exchange, stent lumen share, peak stent stress, wall displacement and pressure drop), the rung
+backflow volume, hole exchange, stent lumen share, peak stent stress, wall displacement and pressure drop, the
+stent's wall shear stress and the holes' gross exchange), the rung
 check's dataset at the corners of the design space (the rung error per corner and quantity, ureterfsi.designs.rung_check),
 the study's dataset (every point's parameters and scalars, per-point trust from the rung check) and its sensitivity
 measures (standardised regression coefficients; first-order and total Sobol' indices, SALib.analyze.sobol).
@@ -19,9 +20,15 @@ from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
 from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, rung_check_metadata
 from ureterfsi.data.provenance import provenance_attrs
 
+# the stent's wall shear stress and the holes' gross exchange, copied from a run file (ureterfsi.study.stent_surface):
+# per run, and per hole
+STENT_SURFACE = tuple(f"stent_{r}_{k}" for r in ("outer", "lumen") for k in ("tawss", "osi", "low_wss_area_fraction"))
+HOLE_SURFACE = ("hole_wall_tawss", "hole_wall_osi", "hole_wall_low_wss_area_fraction", "hole_gross_exchange_volume",
+                "hole_net_volume", "hole_active")
+PER_HOLE = ("peak_hole_flux", "hole_exchange_volume") + HOLE_SURFACE
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
-           "wall_time", "peak_pressure_drop", "mean_pressure_drop")
+           "wall_time", "peak_pressure_drop", "mean_pressure_drop") + STENT_SURFACE + HOLE_SURFACE
 QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",   # figures, indices
               "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop")
 SOBOL_INDICES = {"sobol_first_order": "S1", "sobol_first_order_conf": "S1_conf",   # dataset name: SALib's key
@@ -81,7 +88,9 @@ def point_scalars(run) -> dict:
             "stent_lumen_fraction": lumen_fraction,
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
-            "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run)
+            "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run) | {
+        k: float(run[k]) if k in run else np.nan for k in STENT_SURFACE} | {
+        k: run[k].values.astype(float) if k in run else np.full(hole.shape[0], np.nan) for k in HOLE_SURFACE}
 
 
 def mesh_motion_variables(points, runs) -> dict:
@@ -247,7 +256,7 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
     n = len(st.points)
-    data = {k: np.full((n, n_hole) if k in ("peak_hole_flux", "hole_exchange_volume") else n, np.nan) for k in SCALARS}
+    data = {k: np.full((n, n_hole) if k in PER_HOLE else n, np.nan) for k in SCALARS}
     series = {k: np.full((n, t.size), np.nan) for k in SERIES}
     hole_series, hole_z = np.full((n, n_hole, t.size), np.nan), np.full((n, n_hole), np.nan)
     hole_axis, hole_side = np.full((n, n_hole), np.nan), np.full((n, n_hole), np.nan)

@@ -1,11 +1,12 @@
-"""Figures from the run's field files (read by ureterfsi.data.fieldfiles): the flow at a side hole, the pressure
-along the segment."""
+"""Figures from the run's field files (read by ureterfsi.data.fieldfiles): the flow at a side hole, the wall shear
+stress on the stent around it, the pressure along the segment."""
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.colors import LogNorm
 from matplotlib.patches import Rectangle
 
-from ureterfsi.data.fieldfiles import Section
+from ureterfsi.data.fieldfiles import Section, StentWallShear
 from ureterfsi.plotting.style import plt, styled
 
 
@@ -54,5 +55,42 @@ def fig_pressure_along(lines: dict, times, p_ref: float, pulse_centres, title: s
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("z (mm), inlet (kidney) 0 to outlet (bladder)")
     axes[-1].set_xlim(0.0, z[-1] * 1e3)
+    fig.suptitle(title)
+    return fig
+
+
+def hole_angle(axis: int, side: float) -> float:
+    """Angle (deg) around the stent axis of a hole on axis 0 = x / 1 = y, side +-1."""
+    return 90.0 * side if axis == 1 else (0.0 if side > 0 else 180.0)
+
+
+@styled
+def fig_stent_wall_shear(ws: StentWallShear, hole_z: float, hole_angles, geom, threshold: float, title: str):
+    """The StentWallShear unrolled onto (angle, z), one column per instant: the outer surface with the holes'
+    channels (top row) and the lumen (bottom row); log colour scale, the low-WSS threshold marked on the colour
+    bar; the outlines of the holes at `hole_angles` (deg; r_h / r_o wide in angle) dashed."""
+    rows = {"outer surface and hole walls": ws.radius > geom.stent_inner_radius,
+            "lumen": ws.radius <= geom.stent_inner_radius}
+    fig, axes = plt.subplots(2, len(ws.times), figsize=(3.0 * len(ws.times) + 1.2, 5.6), sharex=True, sharey=True,
+                             constrained_layout=True, squeeze=False)
+    finite = np.concatenate([v[v > 0] for v in ws.values])
+    norm = LogNorm(vmin=max(float(finite.min()), 1e-4 * float(finite.max())), vmax=float(finite.max()))
+    deg, zmm = np.degrees(ws.theta), ws.z * 1e3
+    for j, (t, v) in enumerate(zip(ws.times, ws.values)):
+        for i, (label, sel) in enumerate(rows.items()):
+            ax = axes[i, j]
+            sc = ax.scatter(deg[sel], zmm[sel], c=np.maximum(v[sel], norm.vmin), s=6, cmap="viridis", norm=norm,
+                            linewidths=0)
+            for axis_angle in hole_angles:
+                half = np.degrees(geom.hole_radius / geom.stent_outer_radius)
+                ax.add_patch(Rectangle((axis_angle - half, hole_z * 1e3 - geom.hole_radius * 1e3), 2 * half,
+                                           2 * geom.hole_radius * 1e3, fill=False, ls="--", lw=0.8, ec="k"))
+            ax.set_title(f"t = {t:g} s" if i == 0 else "")
+            if j == 0:
+                ax.set_ylabel(f"z (mm)\n{label}")
+            if i == 1:
+                ax.set_xlabel("angle around the stent axis (deg)")
+    cb = fig.colorbar(sc, ax=axes, label="wall shear stress (Pa)")
+    cb.ax.axhline(threshold, color="r", lw=1.5)
     fig.suptitle(title)
     return fig

@@ -21,9 +21,9 @@ def pose(cfg: dict, spec: RunSpec, settings, mesh, cell_tags, facet_tags) -> pip
     options = replace(solver_options(cfg, fully_coupled=True), mumps_out_of_core=spec.out_of_core)
     pb = MonolithicFSI(scene, options)
     obs = UreterProbes(pb, cfg, StentModel.from_config(cfg, spec.model), spec.symmetry, cfg["time"]["probe_times"])
-    stent = obs.stent if obs.has_stent else None
+    stent, surface = (obs.stent, obs.surface) if obs.has_stent else (None, None)
     return pipeline.Posed(
-        pb, obs, lambda q: coupled_parts(pb, stent, q, cfg["fluid"]["reference_pressure"]),
+        pb, obs, lambda q: coupled_parts(pb, stent, q, cfg["fluid"]["reference_pressure"], surface),
         solver=f"monolithic ALE, P2-P2-P1-P0, BDF2, {pb.options.coupled_solution()}")
 
 

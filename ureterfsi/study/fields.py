@@ -8,6 +8,8 @@ What is written (config `fields`), on the reference (ALE) mesh of each part:
   displacement  m      solid displacement in the wall and stent, ALE mesh displacement in the urine:
                        ParaView's "Warp By Vector" with it gives the current configuration x = X + u
   von_mises     Pa     stent von Mises stress per cell (DG0: cell mean of the probes' DG1 field), NaN off the stent
+  wall_shear_stress  Pa  the stent's wall shear stress on the urine cells beside it (DG0: the mean over each cell's
+                       stent facets, ureterfsi.study.stent_surface), NaN elsewhere
 Nodal fields are the vertex values of the P2 (velocity, displacement) and P1 (pressure) solution.
 
 Parts: the fully coupled run writes one part, `domain` (the whole mesh, with the cell tags as `subdomain`,
@@ -92,6 +94,22 @@ class _CellMean:
         return self.out
 
 
+class _WallShear:
+    """DG0 output: the stent's wall shear stress on the urine cells beside it
+    (ureterfsi.study.stent_surface.StentSurface.cell_magnitude), NaN elsewhere."""
+
+    def __init__(self, surface, mesh):
+        self.out = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="wall_shear_stress")
+        self.surface = surface
+
+    def __call__(self):
+        cells, values = self.surface.cell_magnitude()
+        arr = self.out.x.array
+        arr[:] = np.nan
+        arr[self.out.function_space.dofmap.list.array[cells]] = values
+        return self.out
+
+
 class Part:
     """One mesh of the field output and its fields {quantity: callable -> output fem.Function}."""
 
@@ -106,9 +124,10 @@ def _static_tags(mesh, cell_tags):
     return f
 
 
-def coupled_parts(pb, stent, quantities, reference_pressure: float) -> list[Part]:
-    """Part `domain` of a fully coupled run (ureterfsi.study.coupled): the whole mesh; `stent` a CoupledStent or None;
-    the pressure is reference_pressure (Pa) off the urine (its dofs there are pinned to 0 by the solver)."""
+def coupled_parts(pb, stent, quantities, reference_pressure: float, surface=None) -> list[Part]:
+    """Part `domain` of a fully coupled run (ureterfsi.study.coupled): the whole mesh; `stent` a CoupledStent or None,
+    `surface` its StentSurface or None; the pressure is reference_pressure (Pa) off the urine (its dofs there are
+    pinned to 0 by the solver)."""
     mesh, ct = pb.mesh, pb.scene.cell_tags
     gdim = mesh.geometry.dim
     fluid = np.unique(np.concatenate([ct.find(t) for t in pb.scene.fluid.tags]))
@@ -118,18 +137,23 @@ def coupled_parts(pb, stent, quantities, reference_pressure: float) -> list[Part
                                    outside=(fluid, reference_pressure)),
         "displacement": lambda: _Nodal("displacement", lambda: pb.field("displacement"), mesh, (gdim,)),
         "von_mises": lambda: _CellMean("von_mises", stent.von_mises, mesh, ct.find(tags.STENT)),
+        "wall_shear_stress": lambda: _WallShear(surface, mesh),
     }
-    wanted = [q for q in quantities if q != "von_mises" or stent is not None]
+    wanted = [q for q in quantities if (q != "von_mises" or stent is not None)
+              and (q != "wall_shear_stress" or surface is not None)]
     return [Part("domain", mesh, {q: makers[q]() for q in wanted}, {"subdomain": _static_tags(mesh, ct)})]
 
 
-def oneway_parts(pb, stent, quantities) -> list[Part]:
-    """Parts `urine` (the fluid submesh of the one-way rung) and `stent` (its QuasiStaticStent, or None)."""
+def oneway_parts(pb, stent, quantities, surface=None) -> list[Part]:
+    """Parts `urine` (the fluid submesh of the one-way rung; the stent's wall shear stress from `surface`, its
+    StentSurface, or None) and `stent` (its QuasiStaticStent, or None)."""
     mesh = pb.mesh
     gdim = mesh.geometry.dim
     makers = {"velocity": lambda: _Nodal("velocity", lambda: pb.field("velocity"), mesh, (gdim,)),
               "pressure": lambda: _Nodal("pressure", lambda: pb.field("pressure"), mesh, ()),
               "displacement": lambda: _Nodal("displacement", lambda: pb.field("displacement"), mesh, (gdim,))}
+    if surface is not None:
+        makers["wall_shear_stress"] = lambda: _WallShear(surface, mesh)
     parts = [Part("urine", mesh, {q: makers[q]() for q in quantities if q in makers})]
     if stent is not None:
         smesh = stent.mesh

@@ -3,8 +3,10 @@
 Probes (paper §3, Figs. 3-10, and beyond):
   every step   outlet/inlet volumetric flux, area-mean urine pressure on the outlet/inlet end faces, mean
                axial outlet velocity (the paper's measure), maximum
-               von Mises stress over the stent and where it occurs, fluid volume, flux through every
-               side hole, maximum wall displacement, Newton iterations;
+               von Mises stress over the stent and where it occurs, fluid volume, net flux and gross exchange
+               through every side hole, wall shear stress on the stent's outer surface, lumen and hole walls
+               (ureterfsi.study.stent_surface), maximum wall displacement, Newton iterations;
+  run end      TAWSS, OSI and low-WSS area fraction of those surfaces, per hole its exchange volumes and label;
   probe times  von Mises along the probe line (r = 0.75 mm from the stent axis, plane y = 0, away from the
                holes), ureter outer-wall radial displacement vs z (the wall probe line: the reference outer
                surface R_o(z) on the meridian y = 0, the same line on both rungs), velocity along the hole
@@ -19,14 +21,13 @@ import numpy as np
 import ufl
 import xarray as xr
 from dolfinx import fem
-from dolfinx.fem import petsc as fem_petsc
 from dolfinx.mesh import compute_midpoints
-from mpi4py import MPI
 
 from ureterfsi.mesh import tags
 from ..fsi import Observer
 from ..fsi import physics
 from ..fsi.problem import MonolithicFSI
+from ureterfsi.fsi.wall_shear import ChannelFlux
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
 from ureterfsi.data.cf import cf_meta
 from ureterfsi.fsi.probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
@@ -34,6 +35,7 @@ from ureterfsi.fsi.probes import (CellField, PointProbe, assemble_scalar, end_fa
 from ureterfsi.data.provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre
 from .options import RunSpec
+from .stent_surface import StentSurface, hole_index
 
 N_LINE, N_HOLE = 201, 21
 
@@ -101,7 +103,7 @@ class UreterProbes(Observer):
         n_da = J * ufl.inv(F).T * N
         e_z = ufl.as_vector([0.0, 0.0, 1.0])
         rel = ops.vec(v) - ops.vec(w)
-        ds, dx = pb.ds, pb.dx
+        ds = pb.ds
         self.forms = {k: fem.form(f) for k, f in (flux_volume_forms(pb, tags.INLET, tags.OUTLET)
                                                  | end_face_pressure_forms(pb, tags.INLET, tags.OUTLET)).items()} | {
             "outlet_area": fem.form(ufl.sqrt(ufl.dot(n_da, n_da)) * ops.weight * ds(tags.OUTLET)),
@@ -129,27 +131,21 @@ class UreterProbes(Observer):
             self.holes = [(zk, sd, int(a)) for zk, a in zip(self.hole_z, axes)
                           for sd in ([1.0] if a in cut else [1.0, -1.0])]
             self.hole_fraction = np.array([0.5 if 1 - a in cut else 1.0 for _, _, a in self.holes])
-            Q = fem.FunctionSpace(mesh, ("DG", 0))
             Xc = ufl.SpatialCoordinate(mesh)
             R = ufl.sqrt((Xc[0] - xs) ** 2 + Xc[1] ** 2)
             e_r = ufl.as_vector([(Xc[0] - xs) / R, Xc[1] / R, 0.0])
             grad_chi = e_r / (g.stent_outer_radius - g.stent_inner_radius)
-            # Q_k = int_channel J F^-1 (v - w) . Grad chi dX, chi = (R - r_i)/(r_o - r_i), R from the stent axis: flux through
-            # any surface R = const of the channel (exact for a divergence-free field); outward positive.
-            self.hole_form = fem.form(J * ufl.dot(ufl.inv(F) * rel, grad_chi) * ufl.TestFunction(Q) * dx(tags.FLUID))
-            self.hole_vec = fem_petsc.create_vector(self.hole_form)
+            # net and gross flux through the holes, chi = (R - r_i)/(r_o - r_i), R from the stent axis (ChannelFlux):
+            # over the channel cells of each hole (on its own axis, its side); outward positive
             n_local = mesh.topology.index_map(mesh.topology.dim).size_local
             fluid = pb.cells([tags.FLUID])
             fluid = fluid[fluid < n_local]
             mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
-            d = np.c_[mid[:, 0] - xs, mid[:, 1]]
-            Rm = np.hypot(d[:, 0], d[:, 1])
+            Rm = np.hypot(mid[:, 0] - xs, mid[:, 1])
             chan = (Rm > g.stent_inner_radius) & (Rm < g.stent_outer_radius)
-            self.hole_cells = []
-            for zk, sd, a in self.holes:   # a channel cell on the hole's own axis, on its side
-                sel = (chan & (np.abs(mid[:, 2] - zk) < 2 * g.hole_radius) & (np.sign(d[:, a]) == sd)
-                       & (np.abs(d[:, a]) > np.abs(d[:, 1 - a])))
-                self.hole_cells.append(Q.dofmap.list.array[fluid[sel]])
+            near = hole_index(mid, self.holes, xs, g.hole_radius)
+            self.hole_channels = ChannelFlux(pb, grad_chi, [fluid[chan & (near == k)] for k in range(len(self.holes))])
+            self.surface = StentSurface(pb, cfg, g, self.holes)
             k = int(np.argmax(self.hole_z))
             zh, self.hole_probe_axis = float(self.hole_z[k]), int(axes[k])
             s = np.linspace(-g.hole_radius, g.hole_radius, N_HOLE)
@@ -171,7 +167,8 @@ class UreterProbes(Observer):
                  "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement"]
         if self.has_stent:
             names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
-                      "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux"]
+                      "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux",
+                      "hole_gross_exchange", "stent_outer_wss", "stent_lumen_wss", "hole_wall_wss"]
         return names
 
     def snapshot_names(self):
@@ -200,14 +197,11 @@ class UreterProbes(Observer):
             s["stent_max_von_mises"].append(vmax)
             for c, name in zip(where, "xyz"):
                 s[f"stent_max_von_mises_{name}"].append(c)
-            vec = self.hole_vec
-            with vec.localForm() as loc:
-                loc.set(0.0)
-            fem_petsc.assemble_vector(vec, self.hole_form)
-            arr = vec.array
-            local = np.array([arr[c[c < arr.size]].sum() for c in self.hole_cells])
-            flux = _allreduce_sum(self.comm, local)
-            s["hole_flux"].append((flux / self.hole_fraction).tolist())
+            net, gross = self.hole_channels()
+            s["hole_flux"].append((net / self.hole_fraction).tolist())
+            s["hole_gross_exchange"].append((gross / self.hole_fraction).tolist())
+            for name, value in self.surface.observe(pb.time).items():
+                s[name].append(value)
         if any(abs(pb.time - t) < 1e-9 for t in self.probe_times):
             self.snapshot_times.append(pb.time)
             self.snapshots["wall_radial_displacement"].append(wall.tolist())
@@ -219,17 +213,14 @@ class UreterProbes(Observer):
                     self.hole_probe(self.velocity)[:, self.hole_probe_axis].tolist())
 
     def state(self) -> dict:
-        return {"series": self.series, "snapshots": self.snapshots, "snapshot_times": self.snapshot_times}
+        return {"series": self.series, "snapshots": self.snapshots, "snapshot_times": self.snapshot_times,
+                "stent_surface": self.surface.state() if self.has_stent else None}
 
     def load_state(self, state: dict) -> None:
         self.series, self.snapshots = state["series"], state["snapshots"]
         self.snapshot_times = state["snapshot_times"]
-
-
-def _allreduce_sum(comm, arr):
-    out = np.zeros_like(arr)
-    comm.Allreduce(np.ascontiguousarray(arr), out, op=MPI.SUM)
-    return out
+        if self.has_stent:
+            self.surface.load_state(state["stent_surface"])
 
 
 def _cf(da: xr.DataArray, name: str) -> xr.DataArray:
@@ -244,7 +235,7 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
     t = np.asarray(obs.series["time"])
     ds = xr.Dataset(coords={"time": _cf(xr.DataArray(t, dims="time"), "time")})
     for name in obs.series_names():
-        if name in ("time", "hole_flux"):
+        if name in ("time", "hole_flux", "hole_gross_exchange", "hole_wall_wss"):
             continue
         ds[name] = _cf(xr.DataArray(np.asarray(obs.series[name]), dims="time"), name)
     ds["pulse_centre"] = _cf(xr.DataArray(pulse_centre(cfg["peristalsis"], t), dims="time"), "pulse_centre")
@@ -261,7 +252,12 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
                               hole_z=_cf(xr.DataArray([h[0] for h in obs.holes], dims="hole"), "hole_z"),
                               hole_side=_cf(xr.DataArray([h[1] for h in obs.holes], dims="hole"), "hole_side"),
                               hole_axis=_cf(xr.DataArray([h[2] for h in obs.holes], dims="hole"), "hole_axis"))
-        ds["hole_flux"] = _cf(xr.DataArray(np.asarray(obs.series["hole_flux"]).T, dims=("hole", "time")), "hole_flux")
+        for name in ("hole_flux", "hole_gross_exchange", "hole_wall_wss"):
+            ds[name] = _cf(xr.DataArray(np.asarray(obs.series[name]).reshape(len(t), -1).T, dims=("hole", "time")),
+                           name)
+        summary = obs.surface.summary_variables(obs.comm, t, ds["hole_gross_exchange"].values, ds["hole_flux"].values)
+        for name, (dims, values) in summary.items():
+            ds[name] = _cf(xr.DataArray(values, dims=dims), name)
         ds.attrs["outlet_hole_z"] = obs.outlet_hole_z
     steps = {"step_time": [r.time for r in records], "step_dt": [r.dt for r in records],
              "newton_iterations": [r.newton_iterations for r in records],

@@ -1,6 +1,6 @@
 # Figures drawn from the field files of one run (ureterfsi.study.fields, ureterfsi.plotting.fields; beyond the
-# paper): the urine flow on the mid-plane around the outlet-most side hole at the instants of Figs. 6-9, and
-# the urine pressure along the segment at the instants of Fig. 5. The run is the study run of the Fig. 2
+# paper): the urine flow on the mid-plane around the outlet-most side hole and the wall shear
+# stress on the stent around it at the instants of Figs. 6-9, and the urine pressure along the segment at the instants of Fig. 5. The run is the study run of the Fig. 2
 # model (figures.domain_model), so the figures cost only their plotting. Target: all_field_figures (in all).
 
 FIELD_MODEL = FIGURE2_MODEL
@@ -41,7 +41,22 @@ rule field_pressure:
         "../scripts/field_figures.py"
 
 
+rule field_stent_wss:
+    input:
+        run=FIELD_RUN,
+    output:
+        figure_outputs("field_stent_wss", "Fields"),
+    log:
+        "results/logs/figures/field_stent_wss.log",
+    params:
+        figures=FIGURE_OPTIONS,
+        times=list(HOLE_TIMES.values()),
+    script:
+        "../scripts/field_figures.py"
+
+
 rule all_field_figures:
     input:
         rules.field_hole_flow.output if FIELD_FIGURES else [],
+        rules.field_stent_wss.output if FIELD_FIGURES else [],
         rules.field_pressure.output if FIELD_FIGURES else [],

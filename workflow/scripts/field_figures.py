@@ -4,6 +4,8 @@ import logging
 import os
 from pathlib import Path
 
+import numpy as np
+
 from ureterfsi.data import fieldfiles
 from ureterfsi.plotting import fields as plotting_fields
 from ureterfsi.plotting.style import save_figure
@@ -28,6 +30,15 @@ def draw(rule: str):
         sec = fieldfiles.hole_flow_section(fs, times, hole_z, geom)
         return plotting_fields.fig_hole_flow(sec, hole_z, geom, f"Urine flow at the outlet-most side hole "
                                                                 f"(z = {hole_z * 1e3:g} mm)\n{what}")
+    if rule == "field_stent_wss":
+        hole_z = float(run["hole_z"].max())
+        ws = fieldfiles.stent_wall_shear(fs, times, hole_z, geom)
+        at = np.isclose(run["hole_z"].values, hole_z)
+        angles = [plotting_fields.hole_angle(int(a), float(s))
+                  for a, s in zip(run["hole_axis"].values[at], run["hole_side"].values[at])]
+        return plotting_fields.fig_stent_wall_shear(ws, hole_z, angles, geom, float(run["low_wss_threshold"]),
+                                                    f"Wall shear stress on the stent around the outlet-most side hole "
+                                                    f"(z = {hole_z * 1e3:g} mm)\n{what}")
     if rule == "field_pressure":
         lines = fieldfiles.pressure_lines(fs, times, geom)
         centres = [float(run["pulse_centre"].sel(time=t, method="nearest")) for t in times]

@@ -24,6 +24,12 @@ def annular_poiseuille_flux(R1, R2, G, mu):
     return math.pi * G / (8.0 * mu) * (R2**4 - R1**4 - (R2**2 - R1**2) ** 2 / math.log(R2 / R1))
 
 
+def annular_poiseuille_wall_shear(r, R1, R2, G, mu):
+    """|tau_w| = mu |dv/dr| of annular Poiseuille flow on the wall r = R1 or R2:
+    dv/dr = G/(4 mu) [-2 r + (R2^2 - R1^2) / (r ln(R2/R1))]."""
+    return 0.25 * G * abs(-2.0 * r + (R2**2 - R1**2) / (r * math.log(R2 / R1)))
+
+
 def mooney_rivlin_plane_strain_stress_difference(lam, mat: MooneyRivlin):
     """sigma_theta - sigma_r = lam dW/dlam for the incompressible plane-strain inflation, lam = r/R the hoop
     stretch (principal stretches 1/lam, lam, 1). Plane strain gives I1 = I2 = lam^2 + lam^-2 + 1, so

@@ -2,6 +2,7 @@
 study's materials; SI units."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import gmsh
@@ -96,6 +97,75 @@ class Annulus:
 
     def flux(self):
         return annular_poiseuille_flux(self.R1, self.R2, self.G, self.fluid.dynamic_viscosity)
+
+
+@dataclass
+class Pipe:
+    """Steady Poiseuille flow in a pipe of radius R: v = G (R^2 - r^2) / (4 mu), Q = pi G R^4 / (8 mu),
+    wall shear stress tau_w = G R / 2 = 4 mu Q / (pi R^3)."""
+    radius: float = 1.0e-3      # m (a stent's lumen scale, 10x)
+    length: float = 2.0e-3      # m
+    p_in: float = 130.02        # Pa
+    p_out: float = 130.0        # Pa
+    fluid: NewtonianFluid = URINE
+
+    @property
+    def G(self):
+        return (self.p_in - self.p_out) / self.length
+
+    def flux(self):
+        return math.pi * self.G * self.radius**4 / (8.0 * self.fluid.dynamic_viscosity)
+
+    def wall_shear(self):
+        return 4.0 * self.fluid.dynamic_viscosity * self.flux() / (math.pi * self.radius**3)
+
+
+def pipe_axisymmetric_scene(pipe: Pipe, n):
+    """r-z rectangle [0, R] x [0, L], n cells across; fluid only: no slip on r = R, v_r = 0 on the axis and on the
+    end sections, open ends at p_in (z = 0), p_out (z = L), displacement fixed on every boundary.
+    Facets: 1 inlet, 2 outlet, 3 axis r = 0, 4 wall r = R."""
+    nz = max(1, int(round(n * pipe.length / pipe.radius)))
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([pipe.radius, pipe.length])], (n, nz),
+                                  diagonal=dmesh.DiagonalType.crossed)
+    tol = 1e-9
+    ct = tag_cells(mesh, {1: lambda x: np.full(x.shape[1], True)})
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[1], 0.0, atol=tol),
+                           2: lambda x: np.isclose(x[1], pipe.length, atol=tol),
+                           3: lambda x: np.isclose(x[0], 0.0, atol=tol),
+                           4: lambda x: np.isclose(x[0], pipe.radius, atol=tol)})
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], pipe.fluid),
+                 open_boundaries=[OpenBoundary([1], pipe.p_in, backflow=0.0),
+                                  OpenBoundary([2], pipe.p_out, backflow=0.0)],
+                 dirichlet=[DirichletCondition("velocity", [4]),
+                            DirichletCondition("velocity", [1, 2, 3], components=[0]),
+                            DirichletCondition("displacement", [1, 2, 3, 4])],
+                 axisymmetric=True, name="pipe-poiseuille")
+
+
+def annulus_in_solid_axisymmetric_scene(a: Annulus, n):
+    """The axisymmetric annulus (annulus_axisymmetric_scene) inside a held solid ring R2 < r < R2 + (R2 - R1)/2
+    (the stent material, displacement fixed on its boundary): the wall r = R2 is an interface between fluid
+    (cell tag 1) and solid (2) cells, interior facets tagged 4. Facets: 1 inlet, 2 outlet, 3 r = R1, 4 r = R2,
+    5 the solid's boundary."""
+    gap = a.R2 - a.R1
+    nz = max(1, int(round(n * a.length / gap)))
+    outer = a.R2 + 0.5 * gap
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.array([a.R1, 0.0]), np.array([outer, a.length])],
+                                  (n + n // 2, nz), diagonal=dmesh.DiagonalType.crossed)
+    tol = 1e-9
+    ct = tag_cells(mesh, {1: lambda x: x[0] < a.R2, 2: lambda x: x[0] > a.R2})
+    in_fluid = lambda x: x[0] < a.R2 + tol  # noqa: E731
+    ft = tag_facets(mesh, {1: lambda x: np.isclose(x[1], 0.0, atol=tol) & in_fluid(x),
+                           2: lambda x: np.isclose(x[1], a.length, atol=tol) & in_fluid(x),
+                           3: lambda x: np.isclose(x[0], a.R1, atol=tol),
+                           5: lambda x: ~in_fluid(x)}, ct, interfaces={4: (1, 2)})
+    return Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, fluid=FluidRegion([1], a.fluid),
+                 solids=[SolidRegion([2], STENT)],
+                 open_boundaries=[OpenBoundary([1], a.p_in, backflow=0.0), OpenBoundary([2], a.p_out, backflow=0.0)],
+                 dirichlet=[DirichletCondition("velocity", [3, 5]),
+                            DirichletCondition("velocity", [1, 2], components=[0]),
+                            DirichletCondition("displacement", [1, 2, 3, 5])],
+                 axisymmetric=True, name="annular-poiseuille-in-solid")
 
 
 def annulus_axisymmetric_scene(a: Annulus, n):

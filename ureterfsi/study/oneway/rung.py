@@ -93,7 +93,7 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
                    if stent is not None else "") + ")")
 
     return pipeline.Posed(
-        pb, obs, lambda q: oneway_parts(pb, stent, q),
+        pb, obs, lambda q: oneway_parts(pb, stent, q, obs.surface if obs.has_stent else None),
         solver=(f"one-way: r-z wall (Mooney-Rivlin, BDF2) -> urine alone on the fluid submesh (ALE "
                 f"P2-P1, {pb.mesh_motion_solver} mesh motion, BDF2, Newton + {pb.options.linear_solver}) -> "
                 f"quasi-static linear stent (LU once)"),
