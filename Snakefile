@@ -35,3 +35,7 @@ rule all:
         rules.all_figures.input,
         rules.all_field_figures.input,
         rules.calibration.output,
+
+
+# last: applies the site settings of a cluster run to every rule above
+include: "workflow/rules/cluster.smk"

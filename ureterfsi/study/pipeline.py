@@ -4,6 +4,7 @@ the probe dataset with its provenance attributes, atomic write. A rung passes in
 from __future__ import annotations
 
 import logging
+import resource
 import time as _time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -58,6 +59,16 @@ def integrate_from_rest(pb: MonolithicFSI, settings: TimeSettings, observers,
     return integrator
 
 
+def rank_usage(comm) -> dict:
+    """What the ranks used, measured by themselves (a batch system's record of an `srun` job step may measure its
+    client): peak resident memory summed over the ranks (MiB, from each rank's getrusage ru_maxrss: KiB on
+    Linux), the memory a cluster job of this run must reserve, and each rank's CPU time (user + system, s)."""
+    use = resource.getrusage(resource.RUSAGE_SELF)
+    peaks = comm.allgather(use.ru_maxrss / 1024.0)
+    cpu = comm.allgather(use.ru_utime + use.ru_stime)
+    return {"peak_memory_mib_all_ranks": round(sum(peaks), 1), "cpu_time_s_per_rank": [round(c, 2) for c in cpu]}
+
+
 def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fidelity: str,
         pose: Callable[[TimeSettings, object, object, object], Posed], wall_path: str | None = None) -> xr.Dataset:
     """One run of rung `fidelity`: `pose(settings, mesh, cell_tags, facet_tags)` builds the rung's problem
@@ -83,7 +94,8 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
     ds = probes_dataset(obs, records, cfg, spec, field_attrs | {
         "cells": ncells, "dofs": ndofs, "processes": comm.size, "wall_time_s": round(wall, 2),
         "time_step_s": settings.dt, "end_time_s": settings.end, "solver": posed.solver,
-        "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)} | posed.attrs(),
+        "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)}
+        | rank_usage(comm) | posed.attrs(),
         fidelity=fidelity)
     if comm.rank == 0:
         write_netcdf(ds, out_path)

@@ -3,6 +3,8 @@
 import json
 import sys
 
+from snakemake.exceptions import WorkflowError
+
 from ureterfsi.designs import expand as ureter_designs
 from ureterfsi.config import (
     ConfigError,
@@ -58,10 +60,8 @@ STABILITY_CASES = (
 # unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb. A cluster run
 # (--jobs: resource_settings.nodes; the executor itself is not known yet when the Snakefile is read) gets none:
 # its scheduler holds each job's mem_mb, and a budget of the submit host's memory would cap every job's.
-if (
-    workflow.resource_settings.nodes is None
-    and "mem_mb" not in workflow.global_resources
-):
+CLUSTER_RUN = workflow.resource_settings.nodes is not None
+if not CLUSTER_RUN and "mem_mb" not in workflow.global_resources:
     workflow.register_resource(
         "mem_mb",
         physical_memory_mib() - int(config["study"]["memory_headroom_mb"]),
@@ -136,13 +136,21 @@ def solve_mem_mb(fidelity, symmetry, level):
     )
 
 
-def out_of_core(w):
-    """1 for a fully coupled solve that reserves more memory than the local budget holds (a local run caps its
-    reservation at the budget): MUMPS then keeps its factors on disk, the same solution in a fraction of the
-    memory (docs/performance.md); else 0. A resource, not a param: it does not change the solution, so a changed
-    budget must not re-run a finished solve (params are a rerun trigger)."""
+def memory_budget():
+    """MiB one job may hold: the local budget, or on a cluster what the site says a node has (None: unknown)."""
+    if CLUSTER_RUN:
+        return config["cluster"]["mem_mb_per_node"]
     budget = workflow.global_resources.get("mem_mb")
-    budget = getattr(budget, "raw", budget)
+    return getattr(budget, "raw", budget)
+
+
+def out_of_core(w):
+    """1 for a fully coupled solve that reserves more memory than one job may hold (memory_budget; a local run
+    caps its reservation at the budget, a cluster run at the node's memory): MUMPS then keeps its factors on
+    disk, the same solution in a fraction of the memory (docs/performance.md); else 0. A resource, not a param:
+    it does not change the solution, so a changed budget must not re-run a finished solve (params are a rerun
+    trigger)."""
+    budget = memory_budget()
     reserved = solve_mem_mb(w.fidelity, w.symmetry, w.level)
     return int(
         w.fidelity == "fully_coupled" and budget is not None and reserved > int(budget)
@@ -171,6 +179,20 @@ def mpi_solve(fidelity, symmetry):
     """Whether a solve may run on several MPI ranks: the fully coupled rung in 3D (the one-way rung and
     the r-z runs are serial)."""
     return fidelity == "fully_coupled" and symmetry != "axisymmetric"
+
+
+def solve_job_mem_mb(w):
+    """Resource mem_mb of a solve (solve_mem_mb). On a cluster, a solve that needs more than a node has
+    (cluster.mem_mb_per_node) and cannot keep its factors on disk (out_of_core) is refused before submission.
+    """
+    need = solve_mem_mb(w.fidelity, w.symmetry, w.level)
+    node = memory_budget() if CLUSTER_RUN else None
+    if node is not None and need > node and not out_of_core(w):
+        raise WorkflowError(
+            f"results/runs/{w.fidelity}/{w.symmetry}/model{w.model}_{w.level}.nc needs {need} MiB "
+            f"(study.memory_mb), more than a node has (cluster.mem_mb_per_node: {node})"
+        )
+    return need
 
 
 def solve_mpi(w):

@@ -53,7 +53,7 @@ rule solve:
     resources:
         tasks=1,
         mpi=solve_mpi,
-        mem_mb=lambda w: solve_mem_mb(w.fidelity, w.symmetry, w.level),
+        mem_mb=solve_job_mem_mb,
         runtime=24 * 60,
         mumps_out_of_core=out_of_core,
     params:
