@@ -405,6 +405,7 @@ SHIPPED = [
     ["config/config.yaml", "config/reference.yaml"],
     ["config/config.yaml", "config/ladder-pulse.yaml"],
     ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml"],   # the SLURM profile
+    ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml", "config/site-example.yaml"],  # a site
     ["config/config.yaml", "config/designs/hole_diameter_spacing.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/stricture.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/thin_gap.yaml"],

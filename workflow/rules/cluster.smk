@@ -2,11 +2,9 @@
 # overlay (config/site-example.yaml). Included after every rule: each job gets the site's partition and
 # account, and its tasks, mem_mb and runtime capped at what one node (and the partition) allows, so that no
 # job waits in the queue for a node that cannot exist. Jobs that need more than a node has are refused before
-# submission (solve_node_mem_mb).
+# submission (solve_job_mem_mb).
 import os
 import pwd
-
-from snakemake.resources import Resource
 
 # the SLURM plugin reads USER to guess an account; batch environments and CI containers may not set it
 os.environ.setdefault("USER", pwd.getpwuid(os.getuid()).pw_name)
@@ -16,23 +14,6 @@ NODE_LIMITS = {
     "mem_mb": config["cluster"]["mem_mb_per_node"],
     "runtime": config["cluster"]["runtime_limit_min"],
 }
-
-
-def capped(resource, limit):
-    """`resource` (a rule's value, callable or profile expression) evaluated, then at most `limit`."""
-
-    def value(wildcards, input, attempt, threads, rulename, async_run):
-        v = resource.evaluate(
-            wildcards,
-            input=input,
-            attempt=attempt,
-            threads=threads,
-            rulename=rulename,
-            async_run=async_run,
-        ).value
-        return min(v, limit) if isinstance(v, int) else v
-
-    return Resource(resource.name, value)
 
 
 if CLUSTER_RUN:

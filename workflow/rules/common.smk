@@ -4,6 +4,7 @@ import json
 import sys
 
 from snakemake.exceptions import WorkflowError
+from snakemake.resources import Resource
 
 from ureterfsi.designs import expand as ureter_designs
 from ureterfsi.config import (
@@ -401,3 +402,20 @@ def design_rung_check_caption(wildcards, input):
         ValueError,
     ):  # not made yet (or an empty file of `snakemake --touch`)
         return "measured when the study's dataset is made (its attribute rung_check)"
+
+
+def capped(resource, limit):
+    """`resource` (a rule's value, callable or profile expression) evaluated, then at most `limit`."""
+
+    def value(wildcards, input, attempt, threads, rulename, async_run):
+        v = resource.evaluate(
+            wildcards,
+            input=input,
+            attempt=attempt,
+            threads=threads,
+            rulename=rulename,
+            async_run=async_run,
+        ).value
+        return min(v, limit) if isinstance(v, int) else v
+
+    return Resource(resource.name, value)
