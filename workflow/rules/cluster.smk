@@ -16,17 +16,18 @@ NODE_LIMITS = {
 }
 
 
-if CLUSTER_RUN:
-    for _rule in workflow.rules:
-        for _name, _value in (
-            ("slurm_partition", config["cluster"]["partition"]),
-            ("slurm_account", config["cluster"]["account"]),
+# Not only where Snakemake submits (CLUSTER_RUN): the Snakemake inside a job plans the job's command again, with
+# the same configuration, and must see the same capped ranks.
+for _rule in workflow.rules:
+    for _name, _value in (
+        ("slurm_partition", config["cluster"]["partition"]),
+        ("slurm_account", config["cluster"]["account"]),
+    ):
+        if _value is not None:
+            _rule.resources[_name] = _value
+    for _name, _limit in NODE_LIMITS.items():
+        _resource = _rule.resources.get(_name)
+        if _limit is not None and (
+            _resource.is_evaluable() or _resource.value is not None
         ):
-            if _value is not None:
-                _rule.resources[_name] = _value
-        for _name, _limit in NODE_LIMITS.items():
-            _resource = _rule.resources.get(_name)
-            if _limit is not None and (
-                _resource.is_evaluable() or _resource.value is not None
-            ):
-                _rule.resources[_name] = capped(_rule.resources[_name], _limit)
+            _rule.resources[_name] = capped(_rule.resources[_name], _limit)

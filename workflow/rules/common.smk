@@ -138,9 +138,11 @@ def solve_mem_mb(fidelity, symmetry, level):
 
 
 def memory_budget():
-    """MiB one job may hold: the local budget, or on a cluster what the site says a node has (None: unknown)."""
-    if CLUSTER_RUN:
-        return config["cluster"]["mem_mb_per_node"]
+    """MiB one job may hold: what the site says a node has (config cluster, the same in a cluster job as on the
+    submit host), else on a cluster None (unknown), else the local budget."""
+    node = config["cluster"]["mem_mb_per_node"]
+    if node is not None or CLUSTER_RUN:
+        return node
     budget = workflow.global_resources.get("mem_mb")
     return getattr(budget, "raw", budget)
 
@@ -187,7 +189,7 @@ def solve_job_mem_mb(w):
     (cluster.mem_mb_per_node) and cannot keep its factors on disk (out_of_core) is refused before submission.
     """
     need = solve_mem_mb(w.fidelity, w.symmetry, w.level)
-    node = memory_budget() if CLUSTER_RUN else None
+    node = config["cluster"]["mem_mb_per_node"]
     if node is not None and need > node and not out_of_core(w):
         raise WorkflowError(
             f"results/runs/{w.fidelity}/{w.symmetry}/model{w.model}_{w.level}.nc needs {need} MiB "
