@@ -414,6 +414,7 @@ SHIPPED = [
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml"],
     ["config/config.yaml", "config/occlusion.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/occlusion.yaml"],
+    ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml", "tests/data/ends-mini.yaml"],
     ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/ladder-mini.yaml",
      "tests/data/ladder-mini-passage.yaml"],
 ]

@@ -38,12 +38,12 @@ from .errors import ConfigError
 from .plausible import check_plausible
 from .reading import deep_merge, read_config_args, read_yaml
 from .runs import one_way_unposable, read_run_config, run_config, unmakeable
-from .sections import RUN_SECTIONS, WALL_GEOMETRY, mesh_sections, run_sections, wall_sections
+from .sections import DEFAULTED_RUN_SECTIONS, RUN_SECTIONS, WALL_GEOMETRY, mesh_sections, run_sections, wall_sections
 from .schema import REPO_ROOT, SCHEMA_PATH, load_schema, schema_defaults
 from .validation import DEFAULT_CONFIG, load_config, load_config_files, validate_config
 
 __all__ = [
-    "CHECKS", "ConfigError", "DEFAULT_CONFIG", "MIN_BULK_RATIO", "MIN_ELEMENTS", "MIN_GAP_ELEMENTS",
+    "CHECKS", "ConfigError", "DEFAULT_CONFIG", "DEFAULTED_RUN_SECTIONS", "MIN_BULK_RATIO", "MIN_ELEMENTS", "MIN_GAP_ELEMENTS",
     "MIN_GAP_HOLE_DIAMETERS", "REPO_ROOT", "RTOL", "RUN_SECTIONS", "SCHEMA_PATH", "START_WIDTHS", "WALL_GEOMETRY",
     "check_figures", "check_fluid_bulk", "check_fluid_gap", "check_hole_end_clearance", "check_hole_vs_stent",
     "check_ladder", "check_levels", "check_mesh_sizes", "check_model_keys", "check_models", "check_peristalsis",

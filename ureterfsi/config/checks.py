@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ureterfsi.config.end_pressures import one_way_refusal
 from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions, occluded_holes
 from ureterfsi.config.ranges import SHEAR_MODULUS
 from ureterfsi.stability.naming import Case
@@ -455,13 +456,29 @@ def check_stability(cfg):
             seen[name] = f"stability.axes.{axis}[{i}]"
 
 
+def check_ends(cfg):
+    """The end conditions can be posed: a closed junction resists backflow at least as much as forward flow, and
+    no study run of the one-way rung has end pressures its wall would ignore (scenes.ends.one_way_refusal)."""
+    b = cfg["ends"]["bladder"]
+    if b["junction_backward_resistance"] < b["junction_forward_resistance"]:
+        raise ConfigError("ends.bladder.junction_backward_resistance",
+                          f"{fmt(b['junction_backward_resistance'])} Pa s/m^3 < junction_forward_resistance "
+                          f"{fmt(b['junction_forward_resistance'])} Pa s/m^3: a one-way valve resists backflow more")
+    study = cfg.get("study")
+    if study and any(over.get("fidelity", study["fidelity"]) == "one_way"
+                     for m, over in ({m: {} for m in cfg["models"]} | study["runs"]).items()):
+        why = one_way_refusal(cfg)
+        if why:
+            raise ConfigError("ends", f"a study run of fidelity one_way: {why}")
+
+
 CHECKS = (
     check_plausible,
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_occlusion,
     check_stent_offset,
     check_model_keys, check_models, check_time, check_mesh_sizes, check_levels, check_resolution,
     check_fluid_bulk, check_symmetry, check_peristalsis, check_ureter_material, check_study,
-    check_runs, check_occlusion_rungs, check_ladder, check_figures, check_stability,
+    check_runs, check_occlusion_rungs, check_ladder, check_figures, check_stability, check_ends,
 )
 
 
@@ -471,7 +488,7 @@ RUN_CHECKS = (
     check_ureter_wall, check_hole_vs_stent, check_fluid_gap, check_hole_end_clearance, check_stricture, check_occlusion,
     check_stent_offset,
     check_models, check_time, check_mesh_sizes, check_levels, check_resolution, check_fluid_bulk, check_peristalsis,
-    check_ureter_material,
+    check_ureter_material, check_ends,
 )
 
 

@@ -6,7 +6,7 @@ import json
 from .checks import check_run_config, occlusion_unposable
 from .errors import ConfigError, fmt
 from .schema import schema_defaults
-from .sections import RUN_SECTIONS
+from .sections import DEFAULTED_RUN_SECTIONS, RUN_SECTIONS
 
 
 def one_way_unposable(cfg: dict) -> str:
@@ -46,21 +46,25 @@ def run_config(sections: dict, model: str) -> dict:
     those sections, `models` holding the run's model alone, validated (checks.check_run_config: a file edited by
     hand is refused like a configuration file)."""
     want = set(RUN_SECTIONS) | {"model"}
-    if set(sections) != want:
-        raise ConfigError("<run config>", f"must hold exactly the sections {sorted(want)}, got {sorted(sections)}")
+    if not want <= set(sections) <= want | set(DEFAULTED_RUN_SECTIONS):
+        raise ConfigError("<run config>", f"must hold the sections {sorted(want)} (and of "
+                                          f"{list(DEFAULTED_RUN_SECTIONS)} those off their defaults), got "
+                                          f"{sorted(sections)}")
     for name in RUN_SECTIONS:
         missing = sorted(set(schema_defaults(name)) - set(sections[name]))
         if missing:
             raise ConfigError(f"<run config> {name}.{missing[0]}", "missing: the file was written by another version "
                               "of ureterfsi (re-run rule solve_config)")
-    cfg = {k: sections[k] for k in RUN_SECTIONS} | {"models": {model: sections["model"]}}
+    cfg = ({k: sections[k] for k in RUN_SECTIONS} | {k: sections.get(k, schema_defaults(k))
+                                                     for k in DEFAULTED_RUN_SECTIONS}
+           | {"models": {model: sections["model"]}})
     levels = cfg["mesh"].get("levels") if isinstance(cfg["mesh"], dict) else None
     if isinstance(levels, dict) and all(isinstance(lv, dict) and isinstance(lv.get("size_factor"), (int, float))
                                         for lv in levels.values()):
         # a JSON object has no order (provenance.write_json sorts its keys): the levels, coarse to fine in the
         # configuration, back in that order
         cfg["mesh"] = cfg["mesh"] | {"levels": dict(sorted(levels.items(), key=lambda kv: -kv[1]["size_factor"]))}
-    check_run_config(cfg, RUN_SECTIONS + ("models",))
+    check_run_config(cfg, RUN_SECTIONS + DEFAULTED_RUN_SECTIONS + ("models",))
     return cfg
 
 

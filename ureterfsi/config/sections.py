@@ -2,6 +2,8 @@
 other values is refused. The one list of them: rule mesh, rule solve (and design_solve), the one-way rung's wall."""
 from __future__ import annotations
 
+from .schema import schema_defaults
+
 # the geometry the r-z wall solve reads (ureterfsi.scenes.wall_rz.WallModel): the stent and its holes do not enter
 WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "stricture_fraction", "stricture_length",
                  "stricture_position")
@@ -9,12 +11,17 @@ WALL_GEOMETRY = ("length", "ureter_outer_diameter", "ureter_wall_thickness", "st
 
 RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "mesh", "solver", "fields",
                 "stent_surface")
+# sections a solve reads that enter its configuration only where they differ from the schema's defaults (the paper's
+# setting): a run of the defaults reads them from the schema, so adding such a section re-runs no solve
+DEFAULTED_RUN_SECTIONS = ("ends",)
 
 
 def run_sections(cfg: dict, model: str) -> dict:
-    """The configuration one solve of `model` reads (RUN_SECTIONS and its entry of `models`): a change re-runs
-    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
-    return {k: cfg[k] for k in RUN_SECTIONS} | {"model": cfg["models"][model]}
+    """The configuration one solve of `model` reads (RUN_SECTIONS, DEFAULTED_RUN_SECTIONS off their defaults and its
+    entry of `models`): a change re-runs the solve (rule `solve`), and a checkpoint made from other values is not
+    resumed (ureterfsi.study)."""
+    off = {k: cfg[k] for k in DEFAULTED_RUN_SECTIONS if cfg[k] != schema_defaults(k)}
+    return {k: cfg[k] for k in RUN_SECTIONS} | off | {"model": cfg["models"][model]}
 
 
 def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:

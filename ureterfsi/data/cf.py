@@ -72,6 +72,13 @@ VARIABLES = {
                                     "the ureter"),
     "inlet_lumen_flux": ("m3 s-1", "volumetric flow rate through the inlet inside the stent lumen, positive into the "
                                    "ureter"),
+    "pelvic_pressure": ("Pa", "normal stress on the kidney end face: the renal pelvis pressure (ends.kidney)"),
+    "bladder_pressure": ("Pa", "normal stress on the bladder end face: the bladder pressure, through the "
+                               "vesicoureteral junction if it is a valve (ends.bladder)"),
+    "stent_lumen_reflux_volume": ("m3", "volume of urine moved toward the kidney through the kidney end face inside "
+                                        "the stent lumen since t = 0 (time integral of the reversed inflow)"),
+    "annulus_reflux_volume": ("m3", "volume of urine moved toward the kidney through the kidney end face outside the "
+                                    "stent (the whole lumen without a stent) since t = 0"),
     "stent_lumen_fraction": ("1", "share of the outlet flow passing inside the stent, integral |Q_out,lumen| dt over "
                                   "integral |Q_out,lumen| dt + integral |Q_out - Q_out,lumen| dt"),
     "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall along the wall probe line "

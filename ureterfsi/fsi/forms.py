@@ -18,10 +18,12 @@ class ResidualTerms:
     loads: object       # dead and follower surface loads, body forces (0 without any)
 
 
-def residual_terms(ops, scene, fields: dict, tests: dict, dvdt, dudt, t, dx, ds, convecting=None) -> ResidualTerms:
+def residual_terms(ops, scene, fields: dict, tests: dict, dvdt, dudt, t, dx, ds, convecting=None,
+                   normal_stress=lambda ob: ob.normal_stress) -> ResidualTerms:
     """The terms of the residual in `fields` (UFL parts of the state), `tests` (of the test function), the BDF
     rates dv/dt, du/dt, time t, with the cell and facet measures dx, ds (subdomain data: the scene's tags);
-    `convecting`: the urine's convecting velocity if not its own (physics.fluid_ale_residual)."""
+    `convecting`: the urine's convecting velocity if not its own (physics.fluid_ale_residual); normal_stress(open
+    boundary): its f0 (default its constant; fsi.end_conditions for a lumped condition)."""
     v, u = fields["velocity"], fields["displacement"]
     phi, psi = tests["velocity"], tests["displacement"]
     urine = 0
@@ -30,7 +32,7 @@ def residual_terms(ops, scene, fields: dict, tests: dict, dvdt, dudt, t, dx, ds,
         urine += physics.fluid_ale_residual(ops, fl, v, fields["pressure"], u, dvdt, dudt, phi, tests["pressure"],
                                             dx(tags), convecting)
         for ob in scene.open_boundaries:
-            urine += physics.open_boundary_residual(ops, fl, ob.normal_stress, ob.backflow, v, u, dudt, phi,
+            urine += physics.open_boundary_residual(ops, fl, normal_stress(ob), ob.backflow, v, u, dudt, phi,
                                                     ds(tuple(ob.tags)), convecting)
     solids = 0
     for solid in scene.solids:

@@ -151,7 +151,8 @@ class TimeIntegrator:
         state = pb.state()
         identity = {str(k): str(v) for k, v in self.settings.identity.items()}
         meta = {"step": step, "time": state["time"], "dt_prev": state["dt_prev"], "dt_prev2": state["dt_prev2"],
-                "dt_next": dt_next, "observers": [o.state() for o in self.observers],
+                "dt_next": dt_next,
+                "end_conditions": state["end_conditions"], "observers": [o.state() for o in self.observers],
                 "records": [r.__dict__ for r in self.records],
                 "failed_attempts": [a.__dict__ for a in self.failed_attempts],
                 "identity": identity, "identity_hash": identity_hash(identity)}
@@ -250,7 +251,8 @@ class TimeIntegrator:
         self._pending = None
         data, meta = state
         pb = self.problem
-        pb.set_state({k: data[k] for k in STATE_ARRAYS} | {k: meta[k] for k in ("time", "dt_prev", "dt_prev2")})
+        pb.set_state({k: data[k] for k in STATE_ARRAYS}
+                     | {k: meta[k] for k in ("time", "dt_prev", "dt_prev2", "end_conditions") if k in meta})
         for obs, st in zip(self.observers, meta["observers"]):
             obs.load_state(st)
         self.records = [StepRecord(**r) for r in meta["records"]]

@@ -32,6 +32,7 @@ from . import forms, physics, sparsity
 from .ale_jacobian import ALEJacobian
 from .constraints import Constraints
 from .dofs import DofLayout
+from .end_conditions import STEADY_PASSES, EndConditions
 from .linearly_implicit import LinearlyImplicitStep
 from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              forget_options, owner_prefix)
@@ -136,8 +137,17 @@ class MonolithicFSI(MeshMotionMethods):
         self.ds = ds = ufl.Measure("ds", domain=mesh, subdomain_data=scene.facet_tags, metadata=md)
 
         # --- residual -----------------------------------------------------------------------
+        self.end_conditions = ends = EndConditions(self, v, u, dudt, phi)
+        if ends and opts.coupling_scheme != "monolithic":
+            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs coupling_scheme "
+                             "'monolithic' (the partitioned sweeps do not carry its Jacobian term)")
+        if ends and opts.urine_step != "newton":
+            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs urine_step "
+                             "'newton' (the linearly implicit step does not carry its Jacobian term)")
+
         def terms(dx, ds=ds, convecting=None):
-            return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds, convecting)
+            return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds, convecting,
+                                        ends.normal_stress)
 
         whole = terms(dx)
         R = whole.urine + whole.solids + whole.loads
@@ -304,6 +314,8 @@ class MonolithicFSI(MeshMotionMethods):
     # ---------------------------------------------------------------------------------------
     def _assemble_residual(self):
         t0 = _time.perf_counter()
+        if self.end_conditions:
+            self.end_conditions.update()
         b = self.b
         with b.localForm() as loc:
             loc.set(0.0)
@@ -364,6 +376,10 @@ class MonolithicFSI(MeshMotionMethods):
             detail = self.linear_solver.failure_detail()
             self.invalidate_jacobian()
             return f"linear solve failed (PETSc KSP reason {reason}){detail}"
+        if self.end_conditions:
+            if fresh:
+                self.end_conditions.factorised(lambda rhs, out: self.linear_solver.solve(rhs, out, rtol))
+            self.end_conditions.correct(self.dx_vec)
         self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
         self.counters["factorisations" if fresh else "reused_solves"] += 1
         return None
@@ -447,6 +463,7 @@ class MonolithicFSI(MeshMotionMethods):
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
         self._sync_history()
+        self.end_conditions.accept()
         self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
         self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
         collect_garbage(self.comm)      # the step's temporary PETSc objects (fsi.release)
@@ -487,9 +504,11 @@ class MonolithicFSI(MeshMotionMethods):
 
     def state(self) -> dict:
         """What a restart needs: copies of the process-local arrays x, x_n, x_nm1 and x_nm2 (the BDF
-        history of the last accepted step) and the times time, dt_prev, dt_prev2."""
+        history of the last accepted step), the times time, dt_prev, dt_prev2 and the lumped end conditions'
+        pressures (end_conditions)."""
         return {"x": self.x.x.array.copy(), "x_n": self.x_n.x.array.copy(), "x_nm1": self.x_nm1.x.array.copy(),
-                "x_nm2": self._x_nm2.copy(), "time": self.time, "dt_prev": self.dt_prev, "dt_prev2": self.dt_prev2}
+                "x_nm2": self._x_nm2.copy(), "time": self.time, "dt_prev": self.dt_prev, "dt_prev2": self.dt_prev2,
+                "end_conditions": self.end_conditions.state()}
 
     def set_state(self, state: dict) -> None:
         """Restore a `state()` (arrays of this problem's size): the arrays, the times and the load time t."""
@@ -498,6 +517,8 @@ class MonolithicFSI(MeshMotionMethods):
             array[:] = state[key]
         self._sync_history()
         self.time, self.dt_prev, self.dt_prev2 = state["time"], state["dt_prev"], state["dt_prev2"]
+        if "end_conditions" in state:
+            self.end_conditions.set_state(state["end_conditions"])
         self.t.value = self.time
         self._reaction_ready = False    # the kept residual is not of the restored state
 
@@ -514,6 +535,11 @@ class MonolithicFSI(MeshMotionMethods):
         if self.segregated:
             self.solve_mesh_motion()
         its, history = self.newton()
+        self.end_conditions.hold()
+        for _ in range(STEADY_PASSES - 1 if self.end_conditions.compartments else 0):
+            more, history = self.newton()     # a compartment's next pseudo-step (fsi.end_conditions)
+            its += more
+            self.end_conditions.hold()
         self.x_n.x.array[:] = self.x.x.array
         self.x_nm1.x.array[:] = self.x.x.array
         self._x_nm2[:] = self.x.x.array

@@ -28,10 +28,14 @@ class SolidRegion:
 @dataclass
 class OpenBoundary:
     """Fluid boundary with prescribed normal stress sigma n = -normal_stress n (paper eq. 5),
-    with optional directional backflow stabilisation of strength `backflow` (0 disables)."""
+    with optional directional backflow stabilisation of strength `backflow` (0 disables). `condition`: a
+    Waveform, Compartment or Valve (fsi.end_conditions) whose face pressure replaces normal_stress; it sees the
+    whole model's flux, flux_scale times the face's (1 / the modelled fraction of a symmetric model)."""
     tags: Sequence[int]
     normal_stress: float = 0.0
     backflow: float = 1.0
+    condition: Optional[object] = None
+    flux_scale: float = 1.0
 
 
 @dataclass

@@ -2,8 +2,8 @@
 
 Regions: urine (Newtonian, ALE), ureter wall (Mooney-Rivlin, mixed u-p), stent (Hooke or SVK).
 Loads: travelling Gaussian outward traction on the ureter outer surface (paper §2.4.2, eq. 21).
-Boundaries: open inlet/outlet at the reference pressure (eq. 5), fixed ureter and stent end faces
-(eq. 20), mesh fixed on the open faces, mirror planes of the half/quarter models, axis of the
+Boundaries: open inlet/outlet at the reference pressure (eq. 5) or the configured end conditions (scenes.ends),
+fixed ureter and stent end faces (eq. 20), mesh fixed on the open faces, mirror planes of the half/quarter models, axis of the
 axisymmetric model.
 """
 from __future__ import annotations
@@ -13,8 +13,10 @@ import math
 import ufl
 
 from ureterfsi.mesh import tags
+
 from ..fsi import (DirichletCondition, FluidRegion, LinearElastic, MooneyRivlin, NewtonianFluid,
-                   OpenBoundary, Scene, SolidRegion, SurfaceLoad)
+                   Scene, SolidRegion, SurfaceLoad)
+from .ends import end_boundaries, symmetry_of
 
 FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 
@@ -94,13 +96,11 @@ def ureter_scene(cfg: dict, mesh, cell_tags, facet_tags, axisymmetric: bool = Fa
             dirichlet += [DirichletCondition("velocity", [tag], components=[comp]),
                           DirichletCondition("displacement", [tag], components=[comp])]
 
-    p_ref = cfg["fluid"]["reference_pressure"]
-    beta = cfg["fluid"]["backflow_stabilisation"]
     return Scene(
         mesh, cell_tags, facet_tags,
         fluid=FluidRegion([tags.FLUID], urine),
         solids=solids,
-        open_boundaries=[OpenBoundary([tags.INLET, tags.OUTLET], normal_stress=p_ref, backflow=beta)],
+        open_boundaries=end_boundaries(cfg, has_stent, symmetry_of(facet_present, axisymmetric)),
         loads=[SurfaceLoad([tags.URETER_OUTER], peristaltic_traction(load, axial))],
         dirichlet=dirichlet,
         axisymmetric=axisymmetric,
@@ -112,7 +112,8 @@ def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement
                        axisymmetric: bool = False, mesh_motion=None) -> Scene:
     """The urine alone on the fluid part of a model's mesh (one-way rung, ureterfsi.study.oneway): the inner
     ureter wall moves as prescribed (callables of (x, t)), the stent surfaces are held still, open
-    inlet/outlet at the reference pressure (eq. 5), mesh fixed on the open faces, mirror planes / axis;
+    inlet/outlet at the reference pressure (eq. 5) or the configured end conditions (scenes.ends), mesh fixed on the
+    open faces, mirror planes / axis;
     mesh_motion: the ALE map over the whole urine domain (x, t), or None for the engine's extension."""
     urine, _, _ = materials(cfg)
     dirichlet = [DirichletCondition("velocity", [tags.FLUID_URETER], wall_velocity),
@@ -127,8 +128,7 @@ def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement
         if tag in facet_present:
             dirichlet += [DirichletCondition("velocity", [tag], components=[comp]),
                           DirichletCondition("displacement", [tag], components=[comp])]
-    f = cfg["fluid"]
     return Scene(mesh, cell_tags, facet_tags, fluid=FluidRegion([tags.FLUID], urine),
-                 open_boundaries=[OpenBoundary([tags.INLET, tags.OUTLET], normal_stress=f["reference_pressure"],
-                                               backflow=f["backflow_stabilisation"])],
+                 open_boundaries=end_boundaries(cfg, tags.FLUID_STENT in facet_present,
+                                                symmetry_of(facet_present, axisymmetric)),
                  dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine", mesh_motion=mesh_motion)

@@ -19,6 +19,7 @@ from ..fsi.release import destroy_held
 from ureterfsi.mesh.io import load_mesh
 from ureterfsi.data.cf import write_netcdf
 from .options import RunSpec, time_settings
+from .end_probes import ends_probes
 from .probes import UreterProbes, probes_dataset
 
 log = logging.getLogger("ureterfsi.study")
@@ -86,7 +87,8 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
     log.info("%s model %s, mesh %s (%s): %d cells%s, %d dofs, %d processes, setup %.1f s", fidelity, spec.model,
              spec.level, spec.symmetry, ncells, posed.description, ndofs, comm.size, _time.perf_counter() - wall0)
     fields = field_writer(cfg, out_path, posed.parts, settings.end, comm)
-    integrator = integrate_from_rest(pb, settings, [obs] + posed.observers + ([fields] if fields else []),
+    ends = ends_probes(pb, cfg, spec.symmetry)
+    integrator = integrate_from_rest(pb, settings, [obs, ends] + posed.observers + ([fields] if fields else []),
                                      cfg["fluid"]["reference_pressure"])
     records = integrator.records
     field_attrs = fields.finish(out_path) if fields else {}
@@ -96,7 +98,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
         "time_step_s": settings.dt, "end_time_s": settings.end, "solver": posed.solver,
         "timings": {k: round(v, 2) for k, v in pb.timings.items()}, "counters": dict(pb.counters)}
         | rank_usage(comm) | posed.attrs(),
-        fidelity=fidelity)
+        fidelity=fidelity).assign(ends.variables())
     if comm.rank == 0:
         write_netcdf(ds, out_path)
     comm.Barrier()

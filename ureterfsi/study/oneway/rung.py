@@ -9,7 +9,8 @@ import xarray as xr
 from dolfinx import fem
 from mpi4py import MPI
 
-from ureterfsi.config import one_way_unposable
+from ureterfsi.config import ConfigError, one_way_unposable
+from ureterfsi.config.end_pressures import max_end_pressure, one_way_refusal
 from ureterfsi.mesh import tags
 from ureterfsi.study.fields import oneway_parts
 from ureterfsi.fsi import Observer, TimeSettings
@@ -43,7 +44,11 @@ def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
 def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings, mesh, cell_tags,
          facet_tags) -> pipeline.Posed:
     """The rung on the run's mesh: the wall motion (read from `wall_path`, or solved), the urine alone on the
-    fluid submesh, the quasi-static stent on the stent submesh, the probes and the one-way diagnostics."""
+    fluid submesh, the quasi-static stent on the stent submesh, the probes and the one-way diagnostics. End pressures
+    the wall would ignore are refused (config.end_pressures.one_way_refusal)."""
+    why = one_way_refusal(cfg)
+    if why:
+        raise ConfigError("ends", why)
     if wall_path:
         history = WallHistory.from_dataset(open_netcdf(wall_path, WALL_MOTION), cfg, settings.end, settings.dt)
         log.info("wall (r-z) motion read from %s (%d steps, solved in %.1f s)", wall_path, len(history.time) - 1,
@@ -80,6 +85,8 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
             "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
             "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
             "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
+            # the end pressure above p_ref the wall leaves out (accepted below ends.one_way_max_pressure_fraction)
+            "one_way_ignored_end_pressure": max_end_pressure(cfg)[0],
         }
         if stent is not None:
             extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,

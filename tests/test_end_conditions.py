@@ -1,0 +1,180 @@
+"""Lumped end conditions (fsi.end_conditions) on a rigid axisymmetric pipe (scenes.rigid_pipe) against exact
+solutions and conservation: the 0D pelvis's exponential relaxation (time constant R C, R the pipe's Poiseuille
+resistance), the mass balance of production, outflow and storage, the reflux volume of a voiding pressure step,
+Newton's convergence with the Jacobian's rank-k term, the valve's law and the checkpoint of the 0D state."""
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from ureterfsi.config.end_pressures import bladder_pressure
+from ureterfsi.fsi import Compartment, MonolithicFSI, OpenBoundary, SolverOptions, Valve, Waveform
+from ureterfsi.fsi.end_conditions import EndConditions
+from ureterfsi.fsi.probes import assemble_scalar, flux_volume_forms
+from ureterfsi.scenes.rigid_pipe import INLET, OUTLET, RigidPipe, rigid_pipe_scene
+from ureterfsi.study.end_probes import EndProbes
+
+TIGHT = SolverOptions(newton_rtol=1e-11, newton_atol=1e-13)
+PIPE = RigidPipe()
+R = PIPE.resistance
+TAU = 0.1                    # s, the relaxation time R C posed
+P0 = 100.0                   # Pa
+
+
+def pelvis_problem(production=0.0, outlet=None, options=TIGHT):
+    pelvis = OpenBoundary([INLET], backflow=0.0, condition=Compartment(TAU / R, lambda t: production, P0))
+    """The pipe at rest, the pelvis at P0 (the flow develops within the first step: its viscous time is 1 us)."""
+    pb = MonolithicFSI(rigid_pipe_scene(PIPE, 4, pelvis, outlet or OpenBoundary([OUTLET], 0.0, backflow=0.0)), options)
+    pb.fill("pressure", P0)
+    return pb
+
+
+def relaxation_error(dt, end=0.2):
+    """max over the steps of |p / p_exact - 1|, p_exact = P0 exp(-t / (R C)); Newton iterations per step."""
+    pb = pelvis_problem()
+    errors, iterations = [], []
+    while pb.time < end - 1e-12:
+        its, _ = pb.step(dt)
+        iterations.append(its)
+        errors.append(abs(pb.end_conditions.p[0] / (P0 * math.exp(-pb.time / TAU)) - 1.0))
+    return max(errors), iterations
+
+
+def test_pelvis_relaxation_against_exact_exponential():
+    """C dp/dt = -Q, Q = p / R: p = P0 exp(-t / (R C)); BDF2 (Backward Euler first step) converges at order 2, and
+    the problem is linear, so the exact Jacobian (Woodbury term) gives one Newton iteration per step."""
+    rows = [(dt, *relaxation_error(dt)) for dt in (0.01, 0.005, 0.0025)]
+    orders = [math.log(rows[i][1] / rows[i + 1][1]) / math.log(2.0) for i in range(len(rows) - 1)]
+    print("\n[0D pelvis on a rigid pipe, tau = R C = 0.1 s]  dt   max|p/p_exact - 1|  order  Newton its")
+    for i, (dt, err, its) in enumerate(rows):
+        print(f"    {dt:.4f}  {err:.3e}  {orders[i - 1] if i else float('nan'):5.2f}  {max(its)}")
+    assert rows[-1][1] < 1e-3
+    assert min(orders) > 1.8
+    assert all(max(its) == 1 for _, _, its in rows)
+
+
+def test_newton_needs_the_rank_k_term(monkeypatch):
+    """Without the Woodbury correction the 0D coupling is a fixed point (the factor dt/(R C) per iteration): more
+    Newton iterations; with it, one (test above). Guards the Jacobian term, which leaves the solution unchanged."""
+    monkeypatch.setattr(EndConditions, "correct", lambda self, dx: None)
+    _, iterations = relaxation_error(0.01, end=0.03)
+    assert max(iterations) >= 3
+
+
+def test_mass_balance_production_outflow_storage():
+    """Production = outflow + pelvis storage + change of the lumen volume (rigid: 0), every step, to the solver's
+    tolerance; the outflow through a one-way valve (forward resistance), fluxes from forms of their own."""
+    production = 2.0e-9
+    valve = OpenBoundary([OUTLET], backflow=0.0, condition=Valve(lambda t: 0.0, R, 1e3 * R, 1.0))
+    pb = pelvis_problem(production, valve)
+    forms = {k: __import__("dolfinx").fem.form(f) for k, f in flux_volume_forms(pb, INLET, OUTLET).items()}
+    p_hist = [pb.end_conditions.p[0]] * 2
+    worst, volume0 = 0.0, assemble_scalar(forms["fluid_volume"], pb.comm)
+    for _ in range(6):
+        pb.step(0.01)
+        b0, b1, b2 = (float(c.value) for c in pb.bdf)
+        p = pb.end_conditions.p[0]
+        storage = (TAU / R) * (b0 * p + b1 * p_hist[-1] + b2 * p_hist[-2]) / 0.01
+        p_hist.append(p)
+        outflow = assemble_scalar(forms["outlet_flux"], pb.comm)
+        inflow = assemble_scalar(forms["inlet_flux"], pb.comm)
+        dV = assemble_scalar(forms["fluid_volume"], pb.comm) - volume0
+        worst = max(worst, abs(production - outflow - storage) / production, abs(inflow - outflow) / production)
+        assert dV == pytest.approx(0.0, abs=1e-18)
+    print(f"\n[mass balance] max |production - outflow - storage| / production = {worst:.2e}")
+    assert worst < 1e-8
+
+
+def test_voiding_reflux_volume_against_poiseuille():
+    """A bladder pressure step dp(t) (half-cosine rise, hold, release) through an open (stented) junction against the
+    kidney at p_ref: quasi-steady Poiseuille backflow Q = dp / R, reflux volume int dp dt / R."""
+    ends = {"bladder": {"condition": "voiding", "filling_pressure": 0.0, "detrusor_pressure": 50.0,
+                        "voiding_start": 0.0, "voiding_rise": 0.02, "voiding_hold": 0.04, "voiding_release": 0.02}}
+    p_b = bladder_pressure(ends, 0.0)
+    scene = rigid_pipe_scene(PIPE, 4, OpenBoundary([INLET], 0.0, backflow=0.0),
+                             OpenBoundary([OUTLET], backflow=0.0, condition=Waveform(p_b)))
+    pb = MonolithicFSI(scene, TIGHT)
+    pb.solve_steady()
+    probes = EndProbes(pb, INLET, OUTLET, 1.0)
+    probes.observe(pb, 0)
+    dt = 0.0025
+    while pb.time < 0.1 - 1e-12:
+        pb.step(dt)
+        probes.observe(pb, 0)
+    exact = 50.0 * (0.02 / 2 + 0.04 + 0.02 / 2) / R
+    got = probes.series["annulus_reflux_volume"][-1]
+    print(f"\n[voiding reflux, rigid pipe] {got:.6e} m^3 vs Poiseuille {exact:.6e} m^3: {got / exact - 1:+.2e}; "
+          f"bladder pressure peak {max(probes.series['bladder_pressure']):.1f} Pa")
+    assert got == pytest.approx(exact, rel=2e-3)
+    assert probes.series["stent_lumen_reflux_volume"][-1] == 0.0
+
+
+def test_valve_law_and_quadratic_newton():
+    """Steady flow through the pipe into a one-way valve to p_down: R Q + dp_valve(Q) = p_in - p_down, solved for Q
+    exactly (forward: ~ dp / (R + R_f), backward: ~ -dp / (R + R_b)); in the valve's switch (a 50 Pa wide one, 10 Pa
+    driving) Newton converges quadratically: log r_k+1 / log r_k >= 1.8 (r relative to r_0) once r_k < 1e-2."""
+    rb = 1e3 * R
+    for p_in, p_down, width in ((P0, 0.0, 1e-3), (0.0, P0, 1e-3), (10.0, 0.0, 50.0)):
+        valve = Valve(lambda t, p=p_down: p, R, rb, width)
+        scene = rigid_pipe_scene(PIPE, 4, OpenBoundary([INLET], p_in, backflow=0.0),
+                                 OpenBoundary([OUTLET], backflow=0.0, condition=valve))
+        pb = MonolithicFSI(scene, TIGHT)
+        its, history = pb.solve_steady()
+        q = pb.end_conditions.q[0]
+        exact = brentq(lambda x: R * x + valve.pressure_drop(x)[0] - (p_in - p_down), -1.0, 1.0, xtol=1e-30, rtol=1e-14)
+        rel = [r / history[0] for r in history]
+        rates = [math.log(rel[k + 1]) / math.log(rel[k]) for k in range(len(rel) - 1)
+                 if rel[k] < 1e-2 and rel[k + 1] > 1e-12]   # above the rounding floor
+        print(f"\n[valve] dp = {p_in - p_down:+.0f} Pa, switch {width:g} Pa: Q = {q:.6e} vs {exact:.6e} m^3/s, "
+              f"residuals {' '.join(f'{r:.1e}' for r in history)}")
+        assert q == pytest.approx(exact, rel=1e-6)
+        assert its <= 8
+        assert all(r >= 1.8 for r in rates)
+
+
+def test_steady_state_drains_the_production():
+    """A steady solve poses C dp/dt = 0: the pelvis drains its production, Q_in = Q_prod, at p = R Q_prod."""
+    production = 2.0e-9
+    pb = pelvis_problem(production)
+    pb.solve_steady()
+    assert -pb.end_conditions.q[0] == pytest.approx(production, rel=1e-9)
+    assert pb.end_conditions.p[0] == pytest.approx(R * production, rel=1e-6)
+
+
+def test_checkpointed_end_state_restores_the_run():
+    """state()/set_state() carry the 0D history: a restored run repeats the pressures of the uninterrupted one."""
+    pb = pelvis_problem(production=1e-9)
+    for _ in range(2):
+        pb.step(0.01)
+    saved = pb.state()
+    run = [pb.step(0.01) and pb.end_conditions.p[0] for _ in range(2)]
+    pb.set_state(saved)
+    again = [pb.step(0.01) and pb.end_conditions.p[0] for _ in range(2)]
+    assert np.allclose(run, again, rtol=1e-12)
+    assert saved["end_conditions"]["p_n"] != pb.end_conditions.state()["p_n"]
+
+
+def test_partitioned_scheme_refuses_lumped_conditions():
+    from dataclasses import replace
+    pelvis = OpenBoundary([INLET], backflow=0.0, condition=Compartment(TAU / R, lambda t: 0.0, P0))
+    with pytest.raises(ValueError, match="coupling_scheme 'monolithic'"):
+        MonolithicFSI(rigid_pipe_scene(PIPE, 2, pelvis, OpenBoundary([OUTLET], 0.0)),
+                      replace(TIGHT, coupling_scheme="partitioned"))
+
+
+@pytest.mark.parametrize("change, key, text", [
+    ({"bladder": {"condition": "voiding"}}, "ends", "the one-way rung's wall ignores the urine pressure"),
+    ({"bladder": {"junction_backward_resistance": 1.0e+7}}, "ends.bladder.junction_backward_resistance",
+     "resists backflow more"),
+    ({"kidney": {"urine_production": 1.0e-3}}, "ends.kidney.urine_production", "0.5-2 mL/min"),
+])
+def test_end_conditions_refused_in_one_line(change, key, text):
+    """Voiding pressures on a one-way study (its wall ignores the urine pressure), a valve resisting forward flow
+    more than backflow, an implausible urine production: one line naming the key."""
+    from ureterfsi.config import ConfigError, deep_merge, load_config
+    cfg = load_config()
+    cfg["ends"] = deep_merge(cfg["ends"], change)
+    with pytest.raises(ConfigError) as err:
+        load_config(cfg)
+    assert err.value.key == key and text in str(err.value) and "\n" not in str(err.value)

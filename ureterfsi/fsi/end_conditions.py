@@ -1,0 +1,215 @@
+"""Open boundaries whose normal stress is a time function or a 0D (lumped) model of what lies beyond the face.
+
+An OpenBoundary's `condition` (None: the constant `normal_stress`) is one of
+  Waveform      f0 = p(t), a pressure history;
+  Compartment   a compliance C filled at Q_source(t): C dp/dt = Q_source(t) + Q, f0 = p;
+  Valve         a one-way resistance to a downstream pressure: f0 = p_d(t) + dp(Q), dp a smooth monotone switch
+                between R_f Q (forward flow) and R_b Q (backflow);
+with Q = s int_face (v - w) . n da the flux leaving the 3D domain through the face, n its outward normal and
+s = `flux_scale` the whole model's flux per modelled flux (2 for a half model: the 0D model sees the whole flux).
+
+Time discretisation: the compartment's d/dt is the 3D problem's own BDF (b0 p + b1 p_n + b2 p_n-1)/dt, so
+p^{n+1} = (dt (Q_source + Q^{n+1})/C - b1 p_n - b2 p_n-1)/b0 is affine in Q^{n+1}; a steady solve (b0 = 0) drains
+the source, Q = -Q_source, by STEADY_PASSES Backward Euler pseudo-steps of STEADY_PSEUDO_STEP (the pressure that
+drains it is the solution, the configured one the start). The face pressure is evaluated from the current iterate
+at every residual (implicit coupling). Newton's Jacobian gains the rank-k term sum_i (dp_i/dQ_i) s_i a_i c_i^T, a_i = int n da . phi,
+c_i = d/dx int (v - w) . n da, applied by the Woodbury identity on the kept factorisation of the 3D Jacobian A:
+    dx = y - Z (I + D C^T Z)^-1 D C^T y,  y = A^-1 b,  Z = A^-1 [a_1 .. a_k],  D = diag(s_i dp_i/dQ_i),
+one extra back-substitution per boundary and factorisation, so the exact Jacobian and Newton's quadratic
+convergence at the cost of a few vector assemblies (Vignon-Clementel et al. 2006 couple 0D outlets implicitly).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from . import physics
+
+# A steady state drains the compartment's source (Q = -Q_source): solved as Backward Euler pseudo-steps of this
+# length from the last pressure, each leaving a fraction R C / STEADY_PSEUDO_STEP of the imbalance (R the resistance
+# beyond the face; urinary compartments relax in seconds to minutes, R C < 1e2 s)
+STEADY_PSEUDO_STEP = 1.0e3      # s
+STEADY_PASSES = 3
+
+
+@dataclass
+class Waveform:
+    """Normal stress f0 = pressure(t) (Pa), a float callable of time."""
+    pressure: Callable[[float], float]
+
+    def start(self):
+        return self.pressure(0.0)
+
+    def face_pressure(self, q, t, history):
+        return self.pressure(t), 0.0
+
+
+@dataclass
+class Compartment:
+    """A compliance chamber beyond the face: C dp/dt = source(t) + Q (Q leaving the 3D domain fills it).
+    compliance C (m^3/Pa), source Q_source(t) (m^3/s, float callable), initial_pressure p(0) (Pa)."""
+    compliance: float
+    source: Callable[[float], float]
+    initial_pressure: float
+
+    def start(self):
+        return self.initial_pressure
+
+    def face_pressure(self, q, t, history):
+        """(p, dp/dQ) of the BDF step with coefficients history = (b0, b1, b2, dt, p_n, p_nm1)."""
+        b0, b1, b2, dt, p_n, p_nm1 = history
+        if b0 == 0.0:       # steady: one Backward Euler pseudo-step of STEADY_PSEUDO_STEP from p_n
+            rate = STEADY_PSEUDO_STEP / self.compliance
+            return p_n + rate * (self.source(t) + q), rate
+        rate = dt / (self.compliance * b0)
+        return rate * (self.source(t) + q) - (b1 * p_n + b2 * p_nm1) / b0, rate
+
+
+@dataclass
+class Valve:
+    """One-way resistance to a downstream pressure: f0 = downstream(t) + dp(Q), with
+        dp(Q) = (R_f + R_b)/2 Q + (R_f - R_b)/2 (sqrt(Q^2 + Q_w^2) - Q_w),  Q_w = dp_w / (R_b - R_f),
+    a hyperbola with asymptotes R_f Q (forward, Q >> Q_w) and R_b Q (backflow, Q << -Q_w), both offset by dp_w/2:
+    monotone (dp/dQ between R_f and R_b) and smooth, so Newton converges. forward_resistance R_f <=
+    backward_resistance R_b (Pa s/m^3), smoothing_pressure dp_w (Pa): the width of the switch in pressure."""
+    downstream: Callable[[float], float]
+    forward_resistance: float
+    backward_resistance: float
+    smoothing_pressure: float
+
+    def start(self):
+        return self.downstream(0.0)
+
+    def pressure_drop(self, q):
+        """(dp(Q), d dp/dQ)."""
+        rf, rb = self.forward_resistance, self.backward_resistance
+        if rb == rf:
+            return rf * q, rf
+        qw = self.smoothing_pressure / (rb - rf)
+        root = math.hypot(q, qw)
+        return 0.5 * (rf + rb) * q + 0.5 * (rf - rb) * (root - qw), 0.5 * (rf + rb) + 0.5 * (rf - rb) * q / root
+
+    def face_pressure(self, q, t, history):
+        dp, slope = self.pressure_drop(q)
+        return self.downstream(t) + dp, slope
+
+
+class EndConditions:
+    """The open boundaries of `problem` with a `condition`: their face pressure constants (the residual's f0),
+    flux forms, the Jacobian's Woodbury update and the compartments' pressure history (p_n, p_n-1)."""
+
+    def __init__(self, problem, v, u, w, phi):
+        self.pb = pb = problem
+        ops = pb.ops
+        F = physics.deformation_gradient(ops, u)
+        n_da = ufl.det(F) * ufl.inv(F).T * ops.normal()
+        self.boundaries = [ob for ob in pb.scene.open_boundaries if ob.condition is not None]
+        self.pressure = {}
+        self.flux_forms, self.a_forms, self.c_forms = [], [], []
+        for ob in self.boundaries:
+            ds = pb.ds(tuple(ob.tags))
+            self.pressure[id(ob)] = fem.Constant(pb.mesh, float(ob.condition.start()))
+            flux = ufl.dot(ops.vec(v) - ops.vec(w), n_da) * ops.weight * ds
+            self.flux_forms.append(fem.form(flux))
+            if not isinstance(ob.condition, Waveform):      # a waveform's pressure does not depend on the state
+                self.a_forms.append(fem.form(ufl.dot(n_da, ops.vec(phi)) * ops.weight * ds))
+                self.c_forms.append(fem.form(ufl.derivative(flux, pb.x)))
+        self.coupled = [i for i, ob in enumerate(self.boundaries) if not isinstance(ob.condition, Waveform)]
+        k = len(self.boundaries)
+        self.p = np.array([float(self.pressure[id(ob)].value) for ob in self.boundaries])   # current iterate
+        self.p_n, self.p_nm1 = self.p.copy(), self.p.copy()
+        self.q = np.zeros(k)                 # whole-model flux Q of the current iterate
+        self.slope = np.zeros(k)             # s dp/dQ at the current iterate
+        self._Z = self._C = None      # A^-1 a_i and c_i of the kept factorisation
+        self._D = self._M = None      # diag(s_i dp_i/dQ_i) there, I + D C^T Z
+
+    def __bool__(self):
+        return bool(self.boundaries)
+
+    def normal_stress(self, ob):
+        """The UFL normal stress f0 of an open boundary: its pressure constant, or its fixed value."""
+        return self.pressure[id(ob)] if ob.condition is not None else ob.normal_stress
+
+    def _history(self, i):
+        pb = self.pb
+        b0, b1, b2 = (float(c.value) for c in pb.bdf)
+        return b0, b1, b2, float(pb.dt.value), self.p_n[i], self.p_nm1[i]
+
+    def fluxes(self) -> np.ndarray:
+        """Whole-model flux Q_i = s_i int (v - w) . n da of each boundary at the current state (collective)."""
+        comm = self.pb.comm
+        return np.array([ob.flux_scale * comm.allreduce(fem.assemble_scalar(f))
+                         for ob, f in zip(self.boundaries, self.flux_forms)])
+
+    def update(self) -> None:
+        """Face pressures of the current iterate (called before each residual assembly)."""
+        t = float(self.pb.t.value)
+        self.q = self.fluxes()
+        for i, ob in enumerate(self.boundaries):
+            p, dpdq = ob.condition.face_pressure(self.q[i], t, self._history(i))
+            self.p[i], self.slope[i] = p, ob.flux_scale * dpdq
+            self.pressure[id(ob)].value = p
+
+    @staticmethod
+    def _assemble(vec, form, bcs) -> PETSc.Vec:
+        with vec.localForm() as loc:
+            loc.set(0.0)
+        fem_petsc.assemble_vector(vec, form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fem_petsc.set_bc(vec, bcs, None, 0.0)        # constrained rows and columns are the identity's
+        return vec
+
+    def factorised(self, solve) -> None:
+        """After a fresh factorisation: Z = A^-1 a_i by `solve(rhs, out)`, c_i and D at the current iterate."""
+        if not self.slope.any():
+            self._Z = None
+            return
+        bcs = self.pb.bcs
+        if self._C is None:
+            self._C = [fem_petsc.create_vector(f) for f in self.c_forms]
+            self._a = [fem_petsc.create_vector(f) for f in self.a_forms]
+            self._Zs = [a.duplicate() for a in self._a]
+        for c, f in zip(self._C, self.c_forms):
+            self._assemble(c, f, bcs)
+        for a, z, f in zip(self._a, self._Zs, self.a_forms):
+            solve(self._assemble(a, f, bcs), z)
+        self._Z, self._D = self._Zs, np.diag(self.slope[self.coupled])
+        self._M = np.eye(len(self._Z)) + self._D @ np.array([[c.dot(z) for z in self._Z] for c in self._C])
+
+    def correct(self, dx: PETSc.Vec) -> None:
+        """dx <- dx - Z (I + D C^T Z)^-1 D C^T dx (Woodbury; dx = A^-1 b on entry)."""
+        if self._Z is None:
+            return
+        coef = np.linalg.solve(self._M, self._D @ np.array([c.dot(dx) for c in self._C]))
+        for z, g in zip(self._Z, coef):
+            dx.axpy(-g, z)
+
+    def accept(self) -> None:
+        """Shift the compartments' history after an accepted step."""
+        self.p_nm1[:] = self.p_n
+        self.p_n[:] = self.p
+
+    @property
+    def compartments(self) -> bool:
+        return any(isinstance(ob.condition, Compartment) for ob in self.boundaries)
+
+    def hold(self) -> None:
+        """A steady state: the history is the current pressure."""
+        self.p_nm1[:] = self.p
+        self.p_n[:] = self.p
+
+    def state(self) -> dict:
+        return {"p": self.p.tolist(), "p_n": self.p_n.tolist(), "p_nm1": self.p_nm1.tolist()}
+
+    def set_state(self, state: dict) -> None:
+        for key in ("p", "p_n", "p_nm1"):
+            getattr(self, key)[:] = state[key]
+        for ob, p in zip(self.boundaries, self.p):
+            self.pressure[id(ob)].value = p

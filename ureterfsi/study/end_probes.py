@@ -1,0 +1,81 @@
+"""The end conditions' quantities of a run (ureterfsi.scenes.ends): the pelvic and bladder pressures (the normal
+stress f0 the kidney and bladder end faces see) and the reflux, the volume of urine that has moved toward the kidney
+through the kidney end face since t = 0, inside the stent lumen and in the annulus around it (the whole lumen
+without a stent): V(t) = int_0^t max(-Q_in(s), 0) ds per part, Q_in the part's inflow (trapezoidal rule over
+the steps). Fluxes and volumes are the whole ureter's (the modelled fraction's times its symmetry factor)."""
+from __future__ import annotations
+
+import numpy as np
+import ufl
+import xarray as xr
+from dolfinx import fem
+
+from ureterfsi.data.cf import cf_meta
+from ureterfsi.fsi import Observer, physics
+from ureterfsi.fsi.probes import assemble_scalar, inside_radius
+from ureterfsi.mesh import tags
+from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, UreterGeometry
+
+NAMES = ("pelvic_pressure", "bladder_pressure", "stent_lumen_reflux_volume", "annulus_reflux_volume")
+
+
+class EndProbes(Observer):
+    """Records NAMES after every accepted step of the problem `pb`: kidney face `inlet`, bladder face `outlet`,
+    `fraction` the modelled fraction's symmetry factor (1 / mesh.geometry.SYMMETRY_FRACTION), `lumen` the UFL
+    indicator of the stent lumen on the faces (None: no stent)."""
+
+    def __init__(self, pb, inlet: int, outlet: int, fraction: float, lumen=None):
+        self.pb, self.fraction = pb, fraction
+        ops = pb.ops
+        X, Xdot = pb.split(), pb.split(pb.x_dot)
+        F = physics.deformation_gradient(ops, X["displacement"])
+        n_da = ufl.det(F) * ufl.inv(F).T * ops.normal()
+        inflow = -ufl.dot(ops.vec(X["velocity"]) - ops.vec(Xdot["displacement"]), n_da) * ops.weight
+        inside = 0.0 if lumen is None else lumen
+        self.forms = [fem.form(inside * inflow * pb.ds(inlet)), fem.form((1.0 - inside) * inflow * pb.ds(inlet))]
+        self.faces = [self._boundary(inlet), self._boundary(outlet)]
+        self.series = {name: [] for name in NAMES}
+        self._last = None          # (time, reflux rates) of the last record
+
+    def _boundary(self, tag):
+        return next(ob for ob in self.pb.scene.open_boundaries if tag in ob.tags)
+
+    def observe(self, problem, step: int) -> None:
+        pb, s = self.pb, self.series
+        for name, ob in zip(NAMES[:2], self.faces):
+            f0 = pb.end_conditions.normal_stress(ob)
+            s[name].append(float(getattr(f0, "value", f0)))
+        rates = [max(-self.fraction * assemble_scalar(f, pb.comm), 0.0) for f in self.forms]
+        volumes = [0.0, 0.0]
+        if self._last is not None and s["stent_lumen_reflux_volume"]:
+            t0, r0 = self._last
+            volumes = [s[n][-1] + 0.5 * (pb.time - t0) * (a + b)
+                       for n, a, b in zip(NAMES[2:], r0, rates)]
+        for name, v in zip(NAMES[2:], volumes):
+            s[name].append(v)
+        self._last = (pb.time, rates)
+
+    def state(self) -> dict:
+        return {"series": self.series, "last": self._last}
+
+    def load_state(self, state: dict) -> None:
+        self.series = state["series"]
+        self._last = None if state["last"] is None else (state["last"][0], list(state["last"][1]))
+
+    def variables(self) -> dict:
+        """{name: CF-annotated DataArray over `time`}."""
+        out = {}
+        for name in NAMES:
+            units, long_name = cf_meta(name)
+            out[name] = xr.DataArray(np.asarray(self.series[name]), dims="time",
+                                     attrs={"units": units, "long_name": long_name})
+        return out
+
+
+def ends_probes(pb, cfg: dict, symmetry: str) -> EndProbes:
+    """EndProbes of a ureter run: faces INLET (kidney) and OUTLET (bladder), the stent lumen inside the stent's
+    mid-wall radius (as the probes' lumen fluxes, ureterfsi.study.probes)."""
+    g = UreterGeometry.from_config(cfg)
+    has_stent = pb.comm.allreduce(pb.scene.facet_tags.find(tags.FLUID_STENT).size) > 0
+    lumen = inside_radius(pb.mesh, g.probe_radius, g.stent_offset) if has_stent and not pb.scene.axisymmetric else None
+    return EndProbes(pb, tags.INLET, tags.OUTLET, 1.0 / SYMMETRY_FRACTION[symmetry], lumen)
