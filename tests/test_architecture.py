@@ -243,7 +243,7 @@ MAY_IMPORT = {
     "fsi": {"data.provenance"},
     "mesh": {"data"},
     "plotting": {"analyses", "data", "designs", "mesh", "stability"},
-    "scenes": {"data", "fsi", "mesh"},
+    "scenes": {"config.end_pressures", "data", "fsi", "mesh"},   # the configured end pressures as functions of time
     "stability": {"config", "data", "fsi", "mesh", "scenes", "study"},
     "study": {"config", "data", "fsi", "mesh", "scenes"},
     "workflow": {"config", "data"},
