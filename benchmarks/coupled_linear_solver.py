@@ -10,11 +10,11 @@ norm (fields ordered by dof coordinates, so runs on different process counts com
 variant on 1 and on 2 MPI processes. On a shared machine compare the ratios
 (the CPU ones are the least sensitive to other jobs).
 
-    python benchmarks/coupled_linear_solver.py --config config/config.yaml tests/data/mini-ureter.yaml --steps 4
+    python benchmarks/coupled_linear_solver.py --config config/config.yaml config/segment-10mm.yaml --steps 4
     python benchmarks/coupled_linear_solver.py --level coarse --variants block_gauss_seidel --steps 3
-    python benchmarks/coupled_linear_solver.py --config config/config.yaml tests/data/mini-ureter.yaml --steps 2 \
+    python benchmarks/coupled_linear_solver.py --config config/config.yaml config/segment-10mm.yaml --steps 2 \
         --variants block_gauss_seidel:krylov_forcing=eisenstat_walker --processes 1 2
-    python benchmarks/coupled_linear_solver.py --config config/config.yaml tests/data/mini-ureter.yaml --steps 3 \
+    python benchmarks/coupled_linear_solver.py --config config/config.yaml config/segment-10mm.yaml --steps 3 \
         --variants mumps mumps:jacobian_sparsity=mixed_element block_gauss_seidel:krylov_forcing=eisenstat_walker
 """
 from __future__ import annotations

@@ -10,7 +10,7 @@ Newton tolerance, so their difference must stay at the tolerance's level while t
 the tightest value goes first, and the differences are the errors of the others.
 
     python benchmarks/newton_predictor.py --model 3 --level coarse --end 1.0
-    python benchmarks/newton_predictor.py --config config/config.yaml tests/data/mini-ureter.yaml \
+    python benchmarks/newton_predictor.py --config config/config.yaml config/segment-10mm.yaml \
         --mesh results/meshes/quarter/model3_coarse.msh --fidelity fully_coupled --end 0.08 \
         --setting solver.newton_field_rtol --values 1e-10 null 1e-6
 """

@@ -4,7 +4,7 @@ Per step, side by side in one process: the step (Newton solve), the whole probe 
 stent's wall shear stress (WallShear assembly on the FLUID_STENT facets, region means, time integrals) and the
 holes' channel fluxes (net and gross: the gross is the new half). Prints the medians and their shares of a step.
 
-    python benchmarks/stent_surface_cost.py --config config/config.yaml tests/data/mini-ureter.yaml --steps 4
+    python benchmarks/stent_surface_cost.py --config config/config.yaml config/segment-10mm.yaml --steps 4
 """
 from __future__ import annotations
 

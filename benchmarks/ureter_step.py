@@ -5,7 +5,7 @@ step, Newton iterations per step, the share of residual assembly / Jacobian asse
 solves with a reused factorisation, and the peak memory (max RSS) of the process.
 
     python benchmarks/ureter_step.py --level coarse --steps 5
-    python benchmarks/ureter_step.py --config config/config.yaml tests/data/mini-ureter.yaml --steps 4
+    python benchmarks/ureter_step.py --config config/config.yaml config/segment-10mm.yaml --steps 4
     python benchmarks/ureter_step.py --no-reuse ...          # full Newton: a factorisation per iteration
 """
 from __future__ import annotations

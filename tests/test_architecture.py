@@ -353,8 +353,6 @@ def test_the_package_is_sub_packages_with_all_and_listed():
     assert sorted(MAY_IMPORT) == subs
 
 
-@pytest.mark.xfail(strict=False, reason="designs.rung_check's default segment is tests/data/mini-ureter.yaml until "
-                                        "the 10 mm segment has its own configuration file under config/")
 def test_no_module_reads_the_tests_directory():
     found = test_fixture_paths(_sources("ureterfsi"))
     assert not found, "ureterfsi reads test fixtures:\n" + "\n".join(found)

@@ -401,21 +401,21 @@ def test_unmakeable(cfg, model, level, symmetry, reason):
 # every shipped configuration, as it is used: config files and overlays (each on the ones before it)
 SHIPPED = [
     ["config/config.yaml"],
-    ["config/config.yaml", "config/quickstart.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/quickstart.yaml"],
     ["config/config.yaml", "config/reference.yaml"],
     ["config/config.yaml", "config/ladder-pulse.yaml"],
     ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml"],   # the SLURM profile
     ["config/config.yaml", "config/paper-meshes.yaml", "config/reference.yaml", "config/site-example.yaml"],  # a site
     ["config/config.yaml", "config/designs/hole_diameter_spacing.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/stricture.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/thin_gap.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/arrangement_offset.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/designs/obstruction_sobol.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/stricture.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/thin_gap.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/arrangement_offset.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/obstruction_sobol.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/e2e.yaml"],
     ["config/config.yaml", "config/occlusion.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "config/occlusion.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/e2e.yaml", "tests/data/ends-mini.yaml"],
-    ["config/config.yaml", "tests/data/mini-ureter.yaml", "tests/data/ladder-mini.yaml",
+    ["config/config.yaml", "config/segment-10mm.yaml", "config/occlusion.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/e2e.yaml", "tests/data/ends-mini.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/ladder-mini.yaml",
      "tests/data/ladder-mini-passage.yaml"],
 ]
 

@@ -13,7 +13,7 @@ from ureterfsi.config.validation import load_config_files
 from ureterfsi.designs.expand import saltelli_unit_sample, studies
 
 REPO = Path(__file__).resolve().parent.parent
-FILES = [REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml", REPO / "config/designs/obstruction_sobol.yaml"]
+FILES = [REPO / "config/config.yaml", REPO / "config/segment-10mm.yaml", REPO / "config/designs/obstruction_sobol.yaml"]
 NAME = "obstruction_sobol"
 BOUNDS = {"stricture_fraction": (0.0, 0.6), "hole_diameter": (5e-4, 9e-4), "wall_stiffness_scale": (0.5, 1.5)}
 # SHA-256 (first 16 hex digits) of the point ids of the 64 rows in SALib's order, as run for docs/sensitivity.md

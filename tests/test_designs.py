@@ -604,7 +604,7 @@ def test_offset_half_model_equals_the_full_model_on_its_mirror_image(tmp_path):
     from ureterfsi.mesh.io import mirror_mesh
     from ureterfsi.study.options import RunSpec
 
-    cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "tests/data/mini-ureter.yaml"]),
+    cfg = load_config(load_config_files([REPO / "config/config.yaml", REPO / "config/segment-10mm.yaml"]),
                       {"geometry": {"stent_offset": 1e-3, "hole_arrangement": "rotated_90"}, "mesh": {"symmetry": "half"}})
     build_mesh(cfg, "3", "coarse", "half", tmp_path / "half.msh", tmp_path / "half.json")   # pairs on y, x
     mirror_mesh(tmp_path / "half.msh", tmp_path / "full.msh", "half")

@@ -24,7 +24,7 @@ from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
-MINI = yaml.safe_load((REPO / "tests" / "data" / "mini-ureter.yaml").read_text())
+MINI = yaml.safe_load((REPO / "config" / "segment-10mm.yaml").read_text())
 
 
 def grid(model="3", check=None, **params):
@@ -170,7 +170,7 @@ def test_rung_check_options_and_refusals():
         config_with(s=grid(stricture_fraction=[0.0, 0.5], stricture_length=[0.004], stricture_position=[0.025]))
     msg = str(err.value)
     assert "\n" not in msg and msg.startswith("config error: design_studies.s.rung_check: corner ") and \
-        "cannot be posed on the segment tests/data/mini-ureter.yaml: geometry.stricture_position" in msg, msg
+        "cannot be posed on the segment config/segment-10mm.yaml: geometry.stricture_position" in msg, msg
 
 
 # ------------------------------------------------------------------------------------------ the dataset
@@ -227,7 +227,7 @@ def test_dataset_records_the_rung_error_per_corner(tmp_path):
     assert (ds["in_rung_check_region"].values == 1).all()
     text = ds.attrs["rung_check"]
     assert text.startswith("one_way checked against fully_coupled (partitioned) at 4 corners (all) of the design "
-                           "space on the segment tests/data/mini-ureter.yaml: largest relative error 0.03 "
+                           "space on the segment config/segment-10mm.yaml: largest relative error 0.03 "
                            "(tolerance 0.05); every corner within it; every design point inside the checked region"), text
     meta = rung_check_metadata(st.parameters)
     for k in ("rung_error", "max_rung_error", "rung_tolerance", "corner", "corner_hole_diameter", "rung_trusted",

@@ -19,7 +19,7 @@ REPO = Path(__file__).resolve().parent.parent
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("fields")
-    cfg = load_config_files([REPO / "config" / "config.yaml", REPO / "tests" / "data" / "mini-ureter.yaml"])
+    cfg = load_config_files([REPO / "config" / "config.yaml", REPO / "config" / "segment-10mm.yaml"])
     cfg["time"].update(end=0.04, dt=0.02, probe_times=[0.02, 0.04])
     cfg["peristalsis"]["ramp_time"] = 0.039
     cfg["figures"].update(wave_times=[0.02, 0.04], hole_velocity_times=[0.02, 0.04, 0.02, 0.04])

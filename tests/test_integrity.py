@@ -91,7 +91,7 @@ def test_truncated_dataset_to_a_figure_script(tmp_path, repo_root, capsys):
 @pytest.fixture(scope="module")
 def rz_mesh(tmp_path_factory, repo_root):
     d = tmp_path_factory.mktemp("rz")
-    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     build_mesh(cfg, "1", "coarse", "axisymmetric", d / "m.msh", d / "m.json")
     return d / "m.msh", d / "m.json"
 
@@ -146,7 +146,7 @@ def test_checkpoint_of_another_load_is_not_resumed(rz_mesh, tmp_path, repo_root,
     from ureterfsi.study.options import RunSpec
 
     msh, _ = rz_mesh
-    base = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    base = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     base["time"]["checkpoint_interval"] = 1
     low, high = json.loads(json.dumps(base)), json.loads(json.dumps(base))
     low["peristalsis"]["peak_traction"], high["peristalsis"]["peak_traction"] = 5e4, 1e5
@@ -194,7 +194,7 @@ def test_solve_of_a_truncated_mesh_is_one_line_on_stderr(rz_mesh, tmp_path, repo
     msh, _ = rz_mesh
     cut = tmp_path / "cut.msh"
     cut.write_bytes(msh.read_bytes()[:5000])
-    code = main(["--config", str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml"),
+    code = main(["--config", str(repo_root / "config/config.yaml"), str(repo_root / "config/segment-10mm.yaml"),
                  "--model", "1", "--level", "coarse", "--symmetry", "axisymmetric", "--mesh", str(cut),
                  "--out", str(tmp_path / "out.nc")])
     err = capsys.readouterr().err.strip().splitlines()
@@ -247,7 +247,7 @@ def test_solve_of_a_directory_or_another_models_mesh_is_one_line(rz_mesh, tmp_pa
     msh, _ = rz_mesh
     folder = tmp_path / "dir.msh"
     folder.mkdir()
-    base = ["--config", str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml"),
+    base = ["--config", str(repo_root / "config/config.yaml"), str(repo_root / "config/segment-10mm.yaml"),
             "--level", "coarse", "--out", str(tmp_path / "out.nc"), "--checkpoint", str(tmp_path / "ck.npz")]
     code = main(base + ["--model", "1", "--symmetry", "axisymmetric", "--mesh", str(folder)])
     err = capsys.readouterr().err.strip().splitlines()

@@ -255,7 +255,7 @@ UNSTRICTURED = {("3", "quarter"): (13722, 3079, "0b217fb0b7592e08"),
 def mini():
     from ureterfsi.config import load_config_files
 
-    return load_config_files(["config/config.yaml", "tests/data/mini-ureter.yaml"])
+    return load_config_files(["config/config.yaml", "config/segment-10mm.yaml"])
 
 
 @pytest.mark.parametrize("model,symmetry", sorted(UNSTRICTURED))

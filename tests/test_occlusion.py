@@ -37,7 +37,7 @@ OCCLUSION = {"occlusion_length": 0.001, "occlusion_position": 0.005, "occlusion_
 
 @pytest.fixture(scope="module")
 def occluded_cfg(repo_root):
-    return load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml",
+    return load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml",
                               repo_root / "config/occlusion.yaml"])
 
 

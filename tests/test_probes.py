@@ -267,7 +267,7 @@ def test_wall_line_lies_on_the_outer_facets(tmp_path, repo_root, symmetry, fract
     from ureterfsi.mesh.build import build_mesh
     from ureterfsi.mesh.io import load_mesh
 
-    mini = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    mini = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     cfg = load_config(mini, {"geometry": {"stricture_fraction": fraction, "stricture_length": 0.004,
                                           "stricture_position": 0.005}})
     geom, axisymmetric = UreterGeometry.from_config(cfg), symmetry == "axisymmetric"

@@ -43,7 +43,7 @@ def hole_run(repo_root):
     """The 3D one-way scene on the 10 mm test segment, model 4 (one hole in the quarter), 2 elements across
     the hole, four 10 ms steps through the load ramp (the overlay's 20 ms steps leave a 1.5 % volume
     balance error: O(dt^2) on a 40 ms ramp)."""
-    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     cfg["time"]["dt"] = 0.01
     return S.run_case(cfg, S.Case("hole_elements", 2.0), end=0.04)
 

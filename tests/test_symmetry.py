@@ -23,7 +23,7 @@ from ureterfsi.study.options import RunSpec
 def pair(repo_root, tmp_path_factory):
     """One-way runs of the 10 mm segment, model 4 (one hole pair), quarter mesh and its mirror image."""
     tmp = tmp_path_factory.mktemp("symmetry")
-    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     build_mesh(cfg, "4", "coarse", "quarter", tmp / "quarter.msh", tmp / "quarter.json")
     counts = mirror_mesh(tmp / "quarter.msh", tmp / "full.msh", "quarter")
     runs = {sym: oneway.run(cfg, RunSpec("4", "coarse", sym, str(tmp / f"{sym}.msh"), end=0.04),

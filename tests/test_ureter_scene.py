@@ -1,6 +1,6 @@
 """The ureter scene runs fully coupled (verification 7).
 
-CI variant: model 3 on a 10 mm segment (tests/data/mini-ureter.yaml; same cross-section, materials,
+CI variant: model 3 on a 10 mm segment (config/segment-10mm.yaml; same cross-section, materials,
 load, mesh sizes and quarter symmetry as the study) for 4 steps of 20 ms. The slow variant runs the
 study's own model 3, coarse quarter mesh (638 519 unknowns, ~11 GB for the factorisation).
 """
@@ -36,12 +36,12 @@ def mini_dir(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def mini(mini_dir, repo_root):
-    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
 
 
 @pytest.fixture(scope="module")
 def mini_one_way(mini_dir, repo_root):
-    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"],
+    return _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"],
                 solve=oneway.run)
 
 
@@ -120,7 +120,7 @@ def test_algebraic_mesh_motion_follows_the_extension(mini_dir, repo_root, mini_o
     for name in ("model3.msh", "model3.json"):                  # the same mesh
         shutil.copy(mini_dir / name, ext_dir / name)
     (ext_dir / "extension.yaml").write_text("solver: {one_way_mesh_motion: extension}\n")
-    _, ext = _run(ext_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml",
+    _, ext = _run(ext_dir, [repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml",
                             ext_dir / "extension.yaml"], solve=oneway.run)
     assert alg.attrs["one_way_mesh_motion"] == "algebraic" and ext.attrs["one_way_mesh_motion"] == "extension"
     assert "prescribed" in alg.attrs["solver"] and "lu mesh motion" in ext.attrs["solver"]
@@ -151,7 +151,7 @@ def test_shared_wall_motion_is_the_runs_own(mini_dir, repo_root, mini_one_way):
     end, dt = cfg["time"]["end"], cfg["time"]["dt"]
     h = oneway.WallHistory.from_dataset(wall, cfg, end, dt)
     assert h.inner_ur.shape == (round(end / dt) + 1, h.z_inner.size)
-    _, shared = _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"],
+    _, shared = _run(mini_dir, [repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"],
                      solve=lambda c, spec, out: oneway.run(c, spec, out.replace(".nc", "_shared.nc"), wall_path=str(path)))
     assert shared.attrs["wall_motion_file"] == str(path) and own.attrs["wall_motion_file"] == ""
     for name, var in own.data_vars.items():
@@ -219,7 +219,7 @@ def test_wall_displacement_is_one_measure_on_both_rungs_under_a_stricture(tmp_pa
     over = tmp_path / "stricture.yaml"
     over.write_text("geometry: {stricture_fraction: 0.7, stricture_length: 0.004, stricture_position: 0.005}\n"
                     "mesh: {sizes: {ureter_wall: 2.5e-4}}\n")
-    cfg, ds = _run(tmp_path, [repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml", over],
+    cfg, ds = _run(tmp_path, [repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml", over],
                    model="1", symmetry="axisymmetric")
     geom, z, t = UreterGeometry.from_config(cfg), ds["z"].values, ds["time"].values
     history = oneway.wall_history(cfg, cfg["time"]["end"], cfg["time"]["dt"])
@@ -246,7 +246,7 @@ def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir
 
     from ureterfsi.study.cli import main
     out = tmp_path / "ooc.nc"
-    configs = [str(repo_root / "config/config.yaml"), str(repo_root / "tests/data/mini-ureter.yaml")]
+    configs = [str(repo_root / "config/config.yaml"), str(repo_root / "config/segment-10mm.yaml")]
     assert main(["--config", *configs, "--model", "3", "--level", "coarse", "--symmetry", "quarter",
                  "--mesh", str(mini_dir / "model3.msh"), "--out", str(out), "--end", "0.04", "--out-of-core", "1"]) == 0
     with xr.open_dataset(out) as ooc, xr.open_dataset(mini_dir / "ureterfsi.study.coupled.nc") as ds:

@@ -163,7 +163,7 @@ def test_stent_surface_regions_have_their_areas(tmp_path, repo_root):
     from ureterfsi.mesh.io import load_mesh
     from ureterfsi.study.stent_surface import facet_vertices, stent_wall_regions
 
-    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "tests/data/mini-ureter.yaml"])
+    cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
     build_mesh(cfg, "3", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
     mesh, ct, ft = load_mesh(tmp_path / "m.msh", MPI.COMM_WORLD)
     g = UreterGeometry.from_config(cfg)

@@ -1,6 +1,6 @@
 """The workflow end to end (Snakefile, every rule): one small run of the whole DAG, then its contracts.
 
-Configuration: config/config.yaml + tests/data/mini-ureter.yaml (10 mm segment) + tests/data/e2e.yaml (two
+Configuration: config/config.yaml + config/segment-10mm.yaml (10 mm segment) + tests/data/e2e.yaml (two
 steps of 20 ms, one mesh level `coarse`, models "1" (no stent) and "2" (10 mm between hole pairs)). The
 overlays are merged here into one file handed to Snakemake, with e2e.yaml's `models` and `mesh.levels`
 replacing the inherited ones: Snakemake deep-merges --configfile overlays, so an overlay cannot drop a model
@@ -36,7 +36,7 @@ from _browser import Browser
 from ureterfsi.config import deep_merge, load_config
 
 REPO = Path(__file__).resolve().parent.parent
-CONFIGS = [REPO / "config" / "config.yaml", REPO / "tests" / "data" / "mini-ureter.yaml",
+CONFIGS = [REPO / "config" / "config.yaml", REPO / "config" / "segment-10mm.yaml",
            REPO / "tests" / "data" / "e2e.yaml"]
 REPLACED = (("models",), ("mesh", "levels"), ("ladder", "rungs"))      # e2e.yaml mappings that replace instead of merge
 PROFILE = REPO / "workflow" / "profiles" / "default"

@@ -4,7 +4,7 @@ corners of its design space, on the 10 mm segment.
 A study on a rung cheaper than ``fully_coupled`` (``one_way``: the scenes' rung) is checked at the corners of its
 design space: for each corner the study's rung and the fully coupled model (``fully_coupled_scheme:
 partitioned``, 3D, the corner's mesh) solve the corner's configuration on the segment (config
-``design_studies.<study>.rung_check.segment``, an overlay: the 10 mm segment of ``tests/data/mini-ureter.yaml``),
+``design_studies.<study>.rung_check.segment``, an overlay: the 10 mm segment of ``config/segment-10mm.yaml``),
 each its own job; the dataset records, per corner and per scalar quantity, the relative error
 
     e = |q_rung - q_fully_coupled| / s_q
@@ -46,7 +46,7 @@ from ureterfsi import REPO_ROOT
 
 CORNER_MODES = ("auto", "all", "axes", "none")
 ALL_CORNERS_UP_TO = 3                  # varied parameters below which (inclusive) auto takes every corner
-DEFAULTS = {"corners": "auto", "tolerance": 0.05, "segment": "tests/data/mini-ureter.yaml"}
+DEFAULTS = {"corners": "auto", "tolerance": 0.05, "segment": "config/segment-10mm.yaml"}
 REFERENCE_RUNG = "fully_coupled"
 REFERENCE_SCHEME = "partitioned"       # solver.fully_coupled_scheme of the reference solves (3D: docs/performance.md)
 # sections of the segment overlay a corner takes: the geometry (its length), the load's start and ramp, the time
