@@ -46,12 +46,18 @@ while IFS= read -r pv; do
   [ "$have" = "$pv" ] || echo "setup: warning: Debian $have, workflow/envs/debian.txt says $pv" >&2
 done < <(grep -v '^#' workflow/envs/debian.txt)
 
-# Make the package importable from the venv without a build step.
-site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
-echo "$root" > "$site/ureterfsi-src.pth"
+# The package itself (pyproject.toml), editable: its dependencies are the two sides above, so --no-deps, and it is
+# built by the venv's setuptools (Debian's, a dependency of python3-pip; >= 64 for an editable install), so
+# --no-build-isolation (no download).
+if ! .venv/bin/pip show -f --disable-pip-version-check ureterfsi 2>/dev/null | grep -qx "Editable project location: $root" \
+    || [ pyproject.toml -nt .venv/.ureterfsi-editable ]; then
+  echo "setup: installing ureterfsi into .venv (pip install -e .)"
+  .venv/bin/pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+  touch .venv/.ureterfsi-editable
+fi
 
 .venv/bin/python - <<'PY'
-import numpy, petsc4py, dolfinx, gmsh, snakemake, xarray
-print(f"setup: ok (dolfinx {dolfinx.__version__}, gmsh {gmsh.__version__}, numpy {numpy.__version__}, "
+import numpy, petsc4py, dolfinx, gmsh, snakemake, xarray, ureterfsi
+print(f"setup: ok (ureterfsi {ureterfsi.__version__}, dolfinx {dolfinx.__version__}, gmsh {gmsh.__version__}, numpy {numpy.__version__}, "
       f"snakemake {snakemake.__version__}, xarray {xarray.__version__})")
 PY
