@@ -24,6 +24,8 @@ import sys
 import time
 from pathlib import Path
 
+from ureterfsi.workflow import paths as results
+
 ROOT = Path(__file__).resolve().parent.parent
 RUNGS = ("fully_coupled", "one_way")
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "GOTO_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
@@ -32,8 +34,8 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "GOTO_NUM_THREADS", "OPENBLAS_NUM_THREADS
 
 def prerequisites(configs: list[str], model: str, level: str, symmetry: str) -> dict:
     """Make (through the workflow) and return the paths of the mesh, the run configuration and the wall motion."""
-    paths = {"mesh": f"results/meshes/{symmetry}/model{model}_{level}.msh", "config": f"results/configs/model{model}.json",
-             "wall": "results/runs/one_way/wall_motion.nc"}
+    paths = {"mesh": results.mesh(symmetry, model, level), "config": results.run_config(model),
+             "wall": results.WALL_MOTION}
     subprocess.run([sys.executable, "-m", "snakemake", *paths.values(), "--cores", "1", "--quiet", "progress",
                     "--configfile", *configs], cwd=ROOT, check=True)
     return {k: str(ROOT / v) for k, v in paths.items()}

@@ -37,6 +37,7 @@ from ureterfsi.fsi.linear_solvers import flow_lu_options, schur_fieldsplit_optio
 from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.fsi.submesh import extract
 from ureterfsi.mesh.io import load_mesh
+from ureterfsi.workflow import paths as results
 from ureterfsi.scenes.ureter import ureter_fluid_scene
 from ureterfsi.study import oneway
 from ureterfsi.study.options import solver_options
@@ -63,7 +64,7 @@ VARIANTS = {
 def urine_problem(cfg, model, level, steps):
     dt = cfg["time"]["dt"]
     history = oneway.wall_history(cfg, (steps + 1) * dt, dt)
-    mesh, ct, ft = load_mesh(ROOT / f"results/meshes/quarter/model{model}_{level}.msh", MPI.COMM_WORLD)
+    mesh, ct, ft = load_mesh(ROOT / results.mesh("quarter", model, level), MPI.COMM_WORLD)
     fluid = extract(mesh, ct, ft, [tags.FLUID])
     u_wall, v_wall = oneway.inner_wall_motion(history, False)
     scene = ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall, False)

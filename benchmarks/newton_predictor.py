@@ -27,6 +27,7 @@ import xarray as xr
 import yaml
 
 from ureterfsi.config import load_config_files
+from ureterfsi.workflow import paths as results
 from ureterfsi.analyses.ladder import QUANTITIES, relative_error
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -38,7 +39,7 @@ def solve(cfg, args, value, out):
     cfg[section][key] = value
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
         json.dump(cfg, fh)
-    mesh = args.mesh or str(ROOT / f"results/meshes/quarter/model{args.model}_{args.level}.msh")
+    mesh = args.mesh or str(ROOT / results.mesh("quarter", args.model, args.level))
     r = subprocess.run([sys.executable, "-m", "ureterfsi.study", "--config-json", fh.name, "--model", args.model,
                         "--level", args.level, "--symmetry", "quarter", "--fidelity", args.fidelity, "--end",
                         str(args.end), "--mesh", mesh, "--out", str(out)], capture_output=True, text=True)

@@ -239,13 +239,13 @@ MAY_IMPORT = {
     "analyses": {"data"},
     "config": {"data", "designs", "mesh.geometry", "stability.naming"},
     "data": {"mesh.tags"},
-    "designs": {"config", "data", "mesh"},
+    "designs": {"config", "data", "mesh", "workflow.paths"},
     "fsi": {"data.provenance"},
     "mesh": {"data"},
     "plotting": {"analyses", "data", "designs", "mesh", "stability"},
     "scenes": {"config.end_pressures", "data", "fsi", "mesh"},   # the configured end pressures as functions of time
-    "stability": {"config", "data", "fsi", "mesh", "scenes", "study"},
-    "study": {"config", "data", "fsi", "mesh", "scenes"},
+    "stability": {"config", "data", "fsi", "mesh", "scenes", "study", "workflow.paths"},
+    "study": {"config", "data", "fsi", "mesh", "scenes", "workflow.paths"},
     "workflow": {"config", "data"},
 }
 # sub-packages that never import the solver stack, not even inside a function (figures, tables and checks run

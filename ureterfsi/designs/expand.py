@@ -14,6 +14,7 @@ from ureterfsi.designs import rung_check as rc
 from ureterfsi.designs.space import (ARRANGEMENT, CONFIG_KEYS, FRENCH, FRENCH_RANGE, PARAMETERS, Point,
                                      RESERVED_NAMES, RungCheck, Study, _round, _short_hash, apply, base_values,
                                      map_parameters, point_id, point_symmetry, run_rung)
+from ureterfsi.workflow import paths
 
 
 def saltelli_unit_sample(dim: int, size: int, seed: int) -> np.ndarray:
@@ -42,7 +43,7 @@ def _parameter_key(name: str, spec: dict, param: str) -> str:
 def _check_study(cfg: dict, name: str, spec: dict) -> None:
     key = f"design_studies.{name}"
     if name in RESERVED_NAMES:
-        raise ConfigError(key, f"the name is reserved for results/designs/{name}/; choose another")
+        raise ConfigError(key, f"the name is reserved for {paths.DESIGNS}/{name}/; choose another")
     if spec["model"] not in cfg["models"]:
         raise ConfigError(f"{key}.model", f"must be one of models {sorted(cfg['models'], key=int)}, "
                                           f"got {fmt(spec['model'])}")
@@ -225,23 +226,13 @@ def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungChe
     return check
 
 
-def point_run_path(study: str, point: str) -> str:
-    """The run file of a design point (rule design_solve)."""
-    return f"results/designs/{study}/{point}/run.nc"
-
-
-def corner_run_path(study: str, corner: str, rung: str) -> str:
-    """The run file of a corner's solve on `rung` (rule design_corner_solve)."""
-    return f"results/designs/{study}/rung_check/{corner}/{rung}.nc"
-
-
 def corner_run_paths(st: Study) -> dict:
     """{corner id: (run file on the study's rung, fully coupled run file)} of a checked study; the rung's run of
     a corner that is one of the study's points (on its segment) is that point's."""
     if st.check is None:
         return {}
-    return {c.id: (point_run_path(st.name, st.check.reuses[c.id]) if c.id in st.check.reuses
-                   else corner_run_path(st.name, c.id, st.rung), corner_run_path(st.name, c.id, rc.REFERENCE_RUNG))
+    return {c.id: (paths.design_run(st.name, st.check.reuses[c.id]) if c.id in st.check.reuses
+                   else paths.corner_run(st.name, c.id, st.rung), paths.corner_run(st.name, c.id, rc.REFERENCE_RUNG))
             for c in st.check.corners}
 
 

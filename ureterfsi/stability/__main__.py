@@ -4,6 +4,7 @@ import logging
 from pathlib import Path
 
 from ..config import load_config_files
+from ..workflow import paths
 from . import case_by_name, cases, run_case, write_case
 
 
@@ -12,7 +13,7 @@ def main(argv=None) -> int:
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"])
     ap.add_argument("--case", nargs="*", default=None, help="case names (default: every case)")
     ap.add_argument("--end", type=float, default=None)
-    ap.add_argument("--out", default="results/stability")
+    ap.add_argument("--out", default=paths.STABILITY)
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     cfg = load_config_files(args.config)

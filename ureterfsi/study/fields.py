@@ -36,6 +36,7 @@ from dolfinx import log as dlog
 from ureterfsi.mesh import tags
 from ureterfsi.fsi import Observer
 from ureterfsi.data.cf import FIELD_VARIABLES, cf_meta
+from ureterfsi.workflow import paths
 
 FORMATS = ("xdmf",)
 XI = "http://www.w3.org/2001/XInclude"
@@ -46,9 +47,9 @@ def fields_dir(out_path: str | os.PathLike) -> Path:
     `runs` component replaced); a dataset outside a `runs` folder gets <name>_fields/ beside it."""
     out = Path(out_path)
     parts = list(out.parent.parts)
-    if "runs" in parts:
-        i = len(parts) - 1 - parts[::-1].index("runs")
-        parts[i] = "fields"
+    if paths.RUNS in parts:
+        i = len(parts) - 1 - parts[::-1].index(paths.RUNS)
+        parts[i] = paths.FIELDS
         return Path(*parts) / out.stem
     return out.with_name(out.stem + "_fields")
 

@@ -7,9 +7,9 @@ rule aggregate_models:
     input:
         runs=lambda w: [run_file(m, w.level) for m in MODELS],
     output:
-        "results/datasets/models_{level}.nc",
+        paths.dataset("models_{level}"),
     log:
-        "results/logs/aggregate/models_{level}.log",
+        paths.log("aggregate/models_{level}"),
     threads: 1
     params:
         # rerun triggers: the Table 1 labels stored in the dataset and the time-grid choice
@@ -33,9 +33,9 @@ rule aggregate_convergence:
     input:
         runs=[run_file(CONVERGENCE_MODEL, lv) for lv in LEVELS],
     output:
-        "results/datasets/mesh_convergence.nc",
+        paths.dataset("mesh_convergence"),
     log:
-        "results/logs/aggregate/mesh_convergence.log",
+        paths.log("aggregate/mesh_convergence"),
     threads: 1
     params:
         time=config["study"]["convergence_time"],
@@ -57,12 +57,12 @@ GCI_SAFETY_FACTOR = 1.25  # Celik et al. 2008, three grids
 
 rule gci:
     input:
-        conv="results/datasets/mesh_convergence.nc",
+        conv=paths.dataset("mesh_convergence"),
         mesh=mesh_sidecar(CONVERGENCE_MODEL, LEVELS[-1]),
     output:
-        "results/datasets/mesh_convergence_gci.nc",
+        paths.dataset("mesh_convergence_gci"),
     log:
-        "results/logs/aggregate/mesh_convergence_gci.log",
+        paths.log("aggregate/mesh_convergence_gci"),
     threads: 1
     params:
         points_z=GCI_POINTS_Z,

@@ -5,11 +5,11 @@
 
 rule calibration:
     output:
-        "results/calibration/wall_calibration.json",
+        paths.CALIBRATION,
     log:
-        "results/logs/calibration/wall_calibration.log",
+        paths.log("calibration/wall_calibration"),
     benchmark:
-        "results/benchmarks/calibration/wall_calibration.tsv"
+        paths.benchmark("calibration/wall_calibration")
     threads: 1
     resources:
         mem_mb=2000,

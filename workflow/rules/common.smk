@@ -19,6 +19,7 @@ from ureterfsi.config import (
     validate_config,
     wall_sections,
 )
+from ureterfsi.workflow import paths
 from ureterfsi.workflow.machine import physical_memory_mib
 from ureterfsi.stability import case_by_name, case_setup
 from ureterfsi.stability import cases as stability_cases
@@ -48,7 +49,6 @@ FIGURE_OPTIONS = config["figures"]
 FIGURE_FORMATS = list(FIGURE_OPTIONS["formats"])
 # the report shows one file per figure: the raster format when there is one
 REPORT_FORMAT = "png" if "png" in FIGURE_FORMATS else FIGURE_FORMATS[0]
-WALL_MOTION = "results/runs/one_way/wall_motion.nc"
 DESIGNS = ureter_designs.studies(config)
 STABILITY_CASES = (
     [c.name for c in stability_cases(config)] if "stability" in config else []
@@ -92,20 +92,20 @@ def run_file(model, level):
     """Per-run probe dataset of one stent model on one mesh level (written by the solve rule), at the
     model's fidelity rung and mesh symmetry (study.fidelity, mesh.symmetry, study.runs).
     """
-    return f"results/runs/{run_fidelity(model)}/{run_symmetry(model)}/model{model}_{level}.nc"
+    return paths.run(run_fidelity(model), run_symmetry(model), model, level)
 
 
 def mesh_sidecar(model, level):
     """JSON sidecar of the mesh of one stent model on one mesh level (the mesh its study runs use)."""
-    return f"results/meshes/{run_symmetry(model)}/model{model}_{level}.json"
+    return paths.mesh(run_symmetry(model), model, level, "json")
 
 
 def figure_outputs(stem, category="Paper figures"):
-    """results/figures/<stem>.<ext> for every configured format; the report format goes into the report
+    """The figure files of <stem> (paths.figure), one per configured format; the report format goes into the report
     (caption workflow/report/<stem>.rst)."""
     out = []
     for ext in FIGURE_FORMATS:
-        path = f"results/figures/{stem}.{ext}"
+        path = paths.figure(stem, ext)
         if ext == REPORT_FORMAT:
             path = report(path, caption=f"../report/{stem}.rst", category=category)
         out.append(path)
@@ -167,7 +167,7 @@ def refuse_unmakeable(w):
     reason = unmakeable(config, w.model, w.level, w.symmetry)
     if reason:
         sys.stderr.write(
-            f"target error: results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh: {reason}\n"
+            f"target error: {paths.mesh(w.symmetry, w.model, w.level)}: {reason}\n"
         )
         sys.exit(2)
     return []
@@ -175,7 +175,7 @@ def refuse_unmakeable(w):
 
 def run_config_file(model):
     """The configuration file of a model's solves: config.run_sections as JSON, written by rule solve_config."""
-    return f"results/configs/model{model}.json"
+    return paths.run_config(model)
 
 
 def mpi_solve(fidelity, symmetry):
@@ -226,17 +226,17 @@ def ladder_launcher(wildcards, resources):
 def solve_inputs(w):
     """The mesh and the configuration file, and for the one-way rung the shared wall motion."""
     inputs = {
-        "mesh": f"results/meshes/{w.symmetry}/model{w.model}_{w.level}.msh",
+        "mesh": paths.mesh(w.symmetry, w.model, w.level),
         "config": run_config_file(w.model),
     }
     if w.fidelity == "one_way":
         if one_way_unposable(config):  # refused before any job starts, in one line
             sys.stderr.write(
-                f"target error: results/runs/one_way/{w.symmetry}/model{w.model}_{w.level}.nc: "
+                f"target error: {paths.run('one_way', w.symmetry, w.model, w.level)}: "
                 f"{one_way_unposable(config)}\n"
             )
             sys.exit(2)
-        inputs["wall"] = WALL_MOTION
+        inputs["wall"] = paths.WALL_MOTION
     return inputs
 
 
@@ -260,7 +260,7 @@ def stability_mesh(w):
     s = case_setup(config, case_by_name(config, w.case))
     if s["scene"] == "holes":
         return []
-    return f"results/meshes/axisymmetric/model{s['model']}_{s['level']}.msh"
+    return paths.mesh("axisymmetric", s["model"], s["level"])
 
 
 def stability_memory(w):
@@ -296,18 +296,18 @@ def design_figures(study):
     """The figure files of a design study: parameters; a map for a full-factorial grid over two or more
     parameters with two or more values; sensitivity for sampled studies."""
     return [
-        f"results/figures/designs/{study}_{k}.{ext}"
+        paths.design_figure(study, k, ext)
         for k in ureter_designs.design_figure_kinds(DESIGNS[study])
         for ext in FIGURE_FORMATS
     ]
 
 
 def design_figure_outputs(kind):
-    """results/figures/designs/{design_study}_<kind>.<ext> for every configured format; the report format
+    """The figure files of a design study's <kind> (paths.design_figure), one per configured format; the report format
     goes into the report (caption workflow/report/design_<kind>.rst)."""
     out = []
     for ext in FIGURE_FORMATS:
-        path = f"results/figures/designs/{{design_study}}_{kind}.{ext}"
+        path = paths.design_figure(kind=kind, ext=ext)
         if ext == REPORT_FORMAT:
             path = report(
                 path, caption=f"../report/design_{kind}.rst", category="Design studies"
@@ -328,9 +328,9 @@ def design_mesh_inputs(w):
 def design_solve_inputs(w):
     """The point's mesh, and on the one-way rung its wall motion."""
     p = DESIGNS[w.design_study].point(w.point)
-    out = {"mesh": f"results/designs/meshes/{p.mesh_id}.msh"}
+    out = {"mesh": paths.design_mesh(p.mesh_id)}
     if p.wall_id:
-        out["wall"] = f"results/designs/wall_motion/{p.wall_id}.nc"
+        out["wall"] = paths.design_wall_motion(p.wall_id)
     return out
 
 
@@ -353,9 +353,9 @@ def design_solve_mem_mb(w):
 def design_corner_inputs(w):
     """A corner's mesh, and on the one-way rung its wall motion (the fully coupled solve moves its own wall)."""
     c = DESIGNS[w.design_study].check.corner(w.corner)
-    out = {"mesh": f"results/designs/meshes/{c.mesh_id}.msh"}
+    out = {"mesh": paths.design_mesh(c.mesh_id)}
     if w.corner_rung == "one_way":
-        out["wall"] = f"results/designs/wall_motion/{c.wall_id}.nc"
+        out["wall"] = paths.design_wall_motion(c.wall_id)
     return out
 
 
@@ -378,9 +378,9 @@ def design_corner_mem_mb(w):
 def design_dataset_inputs(w):
     """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
     st = DESIGNS[w.design_study]
-    out = {"runs": [ureter_designs.point_run_path(st.name, p.id) for p in st.points]}
+    out = {"runs": [paths.design_run(st.name, p.id) for p in st.points]}
     if st.check:
-        out["check"] = f"results/designs/{st.name}/rung_check.nc"
+        out["check"] = paths.rung_check(st.name)
     return out
 
 

@@ -1,14 +1,10 @@
 # Design studies (config `design_studies`, ureterfsi.designs.space): every point its own chain of jobs.
-# Meshes and wall motions are content-addressed (shared by every point with the same geometry / wall):
-#   results/designs/meshes/{mesh_id}.msh        design_mesh
-#   results/designs/wall_motion/{wall_id}.nc    design_wall_motion (one-way rung)
-#   results/designs/{study}/{point}/run.nc      design_solve
-#   results/designs/{study}/rung_check/{corner}/{rung}.nc   design_corner_solve: a corner of the design space on
-#       the segment, on the study's rung and fully coupled (ureterfsi.designs.rung_check); a corner that is a point of a
-#       study on the segment reuses the point's run
-#   results/designs/{study}/rung_check.nc       design_rung_check: the rung error per corner and quantity
-#   results/designs/{study}.nc                  design_dataset
-#   results/figures/designs/{study}_*.{ext}     design_figures, design_map, design_sensitivity
+# Meshes and wall motions are content-addressed (shared by every point with the same geometry / wall). The
+# rules (their paths: ureterfsi.workflow.paths): design_mesh, design_wall_motion (one-way rung), design_solve
+# (a point), design_corner_solve (a corner of the design space on the segment, on the study's rung and fully
+# coupled, ureterfsi.designs.rung_check; a corner that is a point of a study on the segment reuses the point's
+# run), design_rung_check (the rung error per corner and quantity), design_dataset, and the figures
+# (design_figures, design_map, design_sensitivity).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 DESIGN_MESHES = {
     p.mesh_id: (st, p)
@@ -35,12 +31,12 @@ if DESIGNS:
 
     rule design_mesh:
         output:
-            msh="results/designs/meshes/{mesh_id}.msh",
-            json="results/designs/meshes/{mesh_id}.json",
+            msh=paths.design_mesh(),
+            json=paths.design_mesh(ext="json"),
         log:
-            "results/logs/designs/meshes/{mesh_id}.log",
+            paths.log("designs/meshes/{mesh_id}"),
         benchmark:
-            "results/benchmarks/designs/meshes/{mesh_id}.tsv"
+            paths.benchmark("designs/meshes/{mesh_id}")
         threads: 1
         params:
             inputs=design_mesh_inputs,
@@ -49,11 +45,11 @@ if DESIGNS:
 
     rule design_wall_motion:
         output:
-            "results/designs/wall_motion/{wall_id}.nc",
+            paths.design_wall_motion(),
         log:
-            "results/logs/designs/wall_motion/{wall_id}.log",
+            paths.log("designs/wall_motion/{wall_id}"),
         benchmark:
-            "results/benchmarks/designs/wall_motion/{wall_id}.tsv"
+            paths.benchmark("designs/wall_motion/{wall_id}")
         threads: 1
         resources:
             mem_mb=config["study"]["memory_mb"]["axisymmetric"],
@@ -68,18 +64,18 @@ if DESIGNS:
         input:
             unpack(design_solve_inputs),
         output:
-            "results/designs/{design_study}/{point}/run.nc",
+            paths.design_run(),
         log:
-            "results/logs/designs/{design_study}/{point}.log",
+            paths.log("designs/{design_study}/{point}"),
         benchmark:
-            "results/benchmarks/designs/{design_study}/{point}.tsv"
+            paths.benchmark("designs/{design_study}/{point}")
         threads: 1
         resources:
             mem_mb=design_solve_mem_mb,
             runtime=24 * 60,
         params:
             study=design_solve_study,
-            checkpoint="results/checkpoints/designs/{design_study}/{point}.npz",
+            checkpoint=paths.checkpoint("designs/{design_study}/{point}"),
         script:
             "../scripts/design_solve.py"
 
@@ -87,18 +83,20 @@ if DESIGNS:
         input:
             unpack(design_corner_inputs),
         output:
-            "results/designs/{design_study}/rung_check/{corner}/{corner_rung}.nc",
+            paths.corner_run(),
         log:
-            "results/logs/designs/{design_study}/rung_check/{corner}_{corner_rung}.log",
+            paths.log("designs/{design_study}/rung_check/{corner}_{corner_rung}"),
         benchmark:
-            "results/benchmarks/designs/{design_study}/rung_check/{corner}_{corner_rung}.tsv"
+            paths.benchmark("designs/{design_study}/rung_check/{corner}_{corner_rung}")
         threads: 1
         resources:
             mem_mb=design_corner_mem_mb,
             runtime=24 * 60,
         params:
             study=design_corner_study,
-            checkpoint="results/checkpoints/designs/{design_study}/rung_check/{corner}_{corner_rung}.npz",
+            checkpoint=paths.checkpoint(
+                "designs/{design_study}/rung_check/{corner}_{corner_rung}"
+            ),
         script:
             "../scripts/design_solve.py"
 
@@ -106,9 +104,9 @@ if DESIGNS:
         input:
             design_corner_runs,
         output:
-            "results/designs/{design_study}/rung_check.nc",
+            paths.rung_check(),
         log:
-            "results/logs/designs/{design_study}_rung_check.log",
+            paths.log("designs/{design_study}_rung_check"),
         threads: 1
         script:
             "../scripts/design_rung_check.py"
@@ -117,20 +115,20 @@ if DESIGNS:
         input:
             unpack(design_dataset_inputs),
         output:
-            "results/designs/{design_study}.nc",
+            paths.design_dataset(),
         log:
-            "results/logs/designs/{design_study}_dataset.log",
+            paths.log("designs/{design_study}_dataset"),
         threads: 1
         script:
             "../scripts/design_dataset.py"
 
     rule design_figures:
         input:
-            "results/designs/{design_study}.nc",
+            paths.design_dataset(),
         output:
             design_figure_outputs("parameters"),
         log:
-            "results/logs/designs/{design_study}_figures.log",
+            paths.log("designs/{design_study}_figures"),
         params:
             dpi=FIGURE_OPTIONS["dpi"],
             rung_check=design_rung_check_caption,
@@ -139,11 +137,11 @@ if DESIGNS:
 
     rule design_map:
         input:
-            "results/designs/{design_study}.nc",
+            paths.design_dataset(),
         output:
             design_figure_outputs("map"),
         log:
-            "results/logs/designs/{design_study}_map.log",
+            paths.log("designs/{design_study}_map"),
         params:
             dpi=FIGURE_OPTIONS["dpi"],
             rung_check=design_rung_check_caption,
@@ -152,11 +150,11 @@ if DESIGNS:
 
     rule design_sensitivity:
         input:
-            "results/designs/{design_study}.nc",
+            paths.design_dataset(),
         output:
             design_figure_outputs("sensitivity"),
         log:
-            "results/logs/designs/{design_study}_sensitivity.log",
+            paths.log("designs/{design_study}_sensitivity"),
         params:
             dpi=FIGURE_OPTIONS["dpi"],
             rung_check=design_rung_check_caption,
@@ -169,7 +167,7 @@ if DESIGNS:
             name:
                 f"design_{_study}"
             input:
-                f"results/designs/{_study}.nc",
+                paths.design_dataset(_study),
                 design_figures(_study),
 
         if DESIGNS[_study].check:
@@ -178,9 +176,9 @@ if DESIGNS:
                 name:
                     f"design_{_study}_rung_check"
                 input:
-                    f"results/designs/{_study}/rung_check.nc",
+                    paths.rung_check(_study),
 
     rule designs_all:
         input:
-            [f"results/designs/{s}.nc" for s in DESIGNS],
+            [paths.design_dataset(s) for s in DESIGNS],
             [f for s in DESIGNS for f in design_figures(s)],

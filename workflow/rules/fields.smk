@@ -19,7 +19,7 @@ rule field_hole_flow:
     output:
         figure_outputs("field_hole_flow", "Fields"),
     log:
-        "results/logs/figures/field_hole_flow.log",
+        paths.log("figures/field_hole_flow"),
     params:
         figures=FIGURE_OPTIONS,
         times=list(HOLE_TIMES.values()),
@@ -33,7 +33,7 @@ rule field_pressure:
     output:
         figure_outputs("field_pressure", "Fields"),
     log:
-        "results/logs/figures/field_pressure.log",
+        paths.log("figures/field_pressure"),
     params:
         figures=FIGURE_OPTIONS,
         times=WAVE_TIMES,
@@ -47,7 +47,7 @@ rule field_stent_wss:
     output:
         figure_outputs("field_stent_wss", "Fields"),
     log:
-        "results/logs/figures/field_stent_wss.log",
+        paths.log("figures/field_stent_wss"),
     params:
         figures=FIGURE_OPTIONS,
         times=list(HOLE_TIMES.values()),

@@ -14,18 +14,18 @@ HOLE_TIMES = dict(
         (float(t) for t in FIGURE_OPTIONS["hole_velocity_times"]),
     )
 )
-MODELS_DATASET = f"results/datasets/models_{STUDY_LEVEL}.nc"
-CONVERGENCE_DATASET = "results/datasets/mesh_convergence.nc"
+MODELS_DATASET = paths.dataset(f"models_{STUDY_LEVEL}")
+CONVERGENCE_DATASET = paths.dataset("mesh_convergence")
 
 
 rule fig02_domain:
     input:
-        msh=f"results/meshes/{SYMMETRY}/model{FIGURE2_MODEL}_{STUDY_LEVEL}.msh",
+        msh=paths.mesh(SYMMETRY, FIGURE2_MODEL, STUDY_LEVEL),
         json=mesh_sidecar(FIGURE2_MODEL, STUDY_LEVEL),
     output:
         figure_outputs("fig02_domain"),
     log:
-        "results/logs/figures/fig02_domain.log",
+        paths.log("figures/fig02_domain"),
     params:
         figures=FIGURE_OPTIONS,
         model=FIGURE2_MODEL,
@@ -39,7 +39,7 @@ rule fig03_mesh_convergence:
     output:
         figure_outputs("fig03_mesh_convergence"),
     log:
-        "results/logs/figures/fig03_mesh_convergence.log",
+        paths.log("figures/fig03_mesh_convergence"),
     params:
         figures=FIGURE_OPTIONS,
     script:
@@ -52,7 +52,7 @@ rule fig04_outlet_flow:
     output:
         figure_outputs("fig04_outlet_flow"),
     log:
-        "results/logs/figures/fig04_outlet_flow.log",
+        paths.log("figures/fig04_outlet_flow"),
     params:
         figures=FIGURE_OPTIONS,
     script:
@@ -65,7 +65,7 @@ rule fig05_wall_displacement:
     output:
         figure_outputs("fig05_wall_displacement"),
     log:
-        "results/logs/figures/fig05_wall_displacement.log",
+        paths.log("figures/fig05_wall_displacement"),
     params:
         figures=FIGURE_OPTIONS,
         times=WAVE_TIMES,
@@ -79,7 +79,7 @@ rule fig06_hole_velocity:
     output:
         figure_outputs("fig06_hole_velocity"),
     log:
-        "results/logs/figures/fig06_hole_velocity.log",
+        paths.log("figures/fig06_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig06"],
@@ -93,7 +93,7 @@ rule fig07_hole_velocity:
     output:
         figure_outputs("fig07_hole_velocity"),
     log:
-        "results/logs/figures/fig07_hole_velocity.log",
+        paths.log("figures/fig07_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig07"],
@@ -107,7 +107,7 @@ rule fig08_hole_velocity:
     output:
         figure_outputs("fig08_hole_velocity"),
     log:
-        "results/logs/figures/fig08_hole_velocity.log",
+        paths.log("figures/fig08_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig08"],
@@ -121,7 +121,7 @@ rule fig09_hole_velocity:
     output:
         figure_outputs("fig09_hole_velocity"),
     log:
-        "results/logs/figures/fig09_hole_velocity.log",
+        paths.log("figures/fig09_hole_velocity"),
     params:
         figures=FIGURE_OPTIONS,
         time=HOLE_TIMES["fig09"],
@@ -135,7 +135,7 @@ rule fig10_stent_von_mises:
     output:
         figure_outputs("fig10_stent_von_mises"),
     log:
-        "results/logs/figures/fig10_stent_von_mises.log",
+        paths.log("figures/fig10_stent_von_mises"),
     params:
         figures=FIGURE_OPTIONS,
     script:
@@ -148,7 +148,7 @@ rule fig11_hole_flux:
     output:
         figure_outputs("fig11_hole_flux"),
     log:
-        "results/logs/figures/fig11_hole_flux.log",
+        paths.log("figures/fig11_hole_flux"),
     params:
         figures=FIGURE_OPTIONS,
     script:
@@ -159,14 +159,14 @@ rule table1:
     input:
         sidecars=[mesh_sidecar(m, STUDY_LEVEL) for m in MODELS],
     output:
-        csv="results/figures/table1.csv",
+        csv=paths.figure("table1", "csv"),
         md=report(
-            "results/figures/table1.md",
+            paths.figure("table1", "md"),
             caption="../report/table1.rst",
             category="Paper figures",
         ),
     log:
-        "results/logs/figures/table1.log",
+        paths.log("figures/table1"),
     params:
         models={m: config["models"][m] for m in MODELS},
     script:
@@ -178,14 +178,14 @@ rule table_gci:
     input:
         gci=rules.gci.output[0],
     output:
-        csv="results/figures/table_gci.csv",
+        csv=paths.figure("table_gci", "csv"),
         md=report(
-            "results/figures/table_gci.md",
+            paths.figure("table_gci", "md"),
             caption="../report/table_gci.rst",
             category="Mesh convergence",
         ),
     log:
-        "results/logs/figures/table_gci.log",
+        paths.log("figures/table_gci"),
     script:
         "../scripts/gci.py"
 

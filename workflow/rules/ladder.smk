@@ -13,16 +13,18 @@ if LADDER:
 
     rule ladder_run:
         input:
-            mesh=lambda w: "results/meshes/{symmetry}/model{model}_{level}.msh".format(
-                model=LADDER["model"], **LADDER_RUNGS[w.rung]
+            mesh=lambda w: paths.mesh(
+                LADDER_RUNGS[w.rung]["symmetry"],
+                LADDER["model"],
+                LADDER_RUNGS[w.rung]["level"],
             ),
             config=run_config_file(LADDER["model"]),
         output:
-            "results/ladder/{rung}.nc",
+            paths.ladder_run(),
         log:
-            "results/logs/ladder/{rung}.log",
+            paths.log("ladder/{rung}"),
         benchmark:
-            "results/benchmarks/ladder/{rung}.tsv"
+            paths.benchmark("ladder/{rung}")
         threads: 1
         resources:
             mem_mb=lambda w: solve_mem_mb(
@@ -37,7 +39,7 @@ if LADDER:
             end=LADDER["end"],
             model=LADDER["model"],
             launcher=ladder_launcher,
-            checkpoint="results/checkpoints/ladder/{rung}.npz",
+            checkpoint=paths.checkpoint("ladder/{rung}"),
         shell:
             "{params.launcher} -m ureterfsi.study"
             " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
@@ -47,18 +49,18 @@ if LADDER:
 
     rule ladder:
         input:
-            runs=expand("results/ladder/{rung}.nc", rung=LADDER_RUNGS),
+            runs=expand(paths.ladder_run(), rung=LADDER_RUNGS),
         output:
-            dataset="results/datasets/ladder.nc",
+            dataset=paths.dataset("ladder"),
             md=report(
-                "results/figures/table_ladder.md",
+                paths.figure("table_ladder", "md"),
                 caption="../report/table_ladder.rst",
                 category="Fidelity ladder",
             ),
             figures=figure_outputs("ladder_pareto", "Fidelity ladder"),
             overlay=figure_outputs("ladder_overlay", "Fidelity ladder"),
         log:
-            "results/logs/ladder/ladder.log",
+            paths.log("ladder/ladder"),
         params:
             rungs=list(LADDER_RUNGS),
             figures=FIGURE_OPTIONS,

@@ -8,12 +8,12 @@ rule mesh:
     input:
         refuse_unmakeable,
     output:
-        msh="results/meshes/{symmetry}/model{model}_{level}.msh",
-        json="results/meshes/{symmetry}/model{model}_{level}.json",
+        msh=paths.mesh(),
+        json=paths.mesh(ext="json"),
     log:
-        "results/logs/mesh/{symmetry}/model{model}_{level}.log",
+        paths.log("mesh/{symmetry}/model{model}_{level}"),
     benchmark:
-        "results/benchmarks/mesh/{symmetry}/model{model}_{level}.tsv"
+        paths.benchmark("mesh/{symmetry}/model{model}_{level}")
     priority: level_priority
     threads: 1
     params:
@@ -29,20 +29,20 @@ rule all_meshes:
         sorted(
             set(
                 expand(
-                    "results/meshes/{symmetry}/model{model}_{level}.{ext}",
+                    paths.mesh(ext="{ext}"),
                     symmetry=SYMMETRY,
                     model=MODELS,
                     level=LEVELS,
                     ext=("msh", "json"),
                 )
                 + expand(
-                    "results/meshes/axisymmetric/model{model}_{level}.{ext}",
+                    paths.mesh("axisymmetric", ext="{ext}"),
                     model=AXISYMMETRIC_MODELS,
                     level=LEVELS,
                     ext=("msh", "json"),
                 )
                 + [
-                    f"results/meshes/{run_symmetry(m)}/model{m}_{lv}.{ext}"
+                    paths.mesh(run_symmetry(m), m, lv, ext)
                     for m in MODELS
                     for lv in LEVELS
                     for ext in ("msh", "json")

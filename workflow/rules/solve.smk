@@ -10,7 +10,7 @@ rule solve_config:
     output:
         run_config_file("{model}"),
     log:
-        "results/logs/solve/config/model{model}.log",
+        paths.log("solve/config/model{model}"),
     localrule: True
     params:
         # rerun trigger and the file's content: the configuration one solve of the model reads
@@ -24,11 +24,11 @@ rule wall_motion:
     (their wall is the same: geometry and load do not depend on the stent model or the 3D mesh).
     """
     output:
-        WALL_MOTION,
+        paths.WALL_MOTION,
     log:
-        "results/logs/solve/one_way/wall_motion.log",
+        paths.log("solve/one_way/wall_motion"),
     benchmark:
-        "results/benchmarks/solve/one_way/wall_motion.tsv"
+        paths.benchmark("solve/one_way/wall_motion")
     priority: 10
     threads: 1
     resources:
@@ -43,11 +43,11 @@ rule solve:
     input:
         unpack(solve_inputs),
     output:
-        "results/runs/{fidelity}/{symmetry}/model{model}_{level}.nc",
+        paths.run(),
     log:
-        "results/logs/solve/{fidelity}/{symmetry}/model{model}_{level}.log",
+        paths.log("solve/{fidelity}/{symmetry}/model{model}_{level}"),
     benchmark:
-        "results/benchmarks/solve/{fidelity}/{symmetry}/model{model}_{level}.tsv"
+        paths.benchmark("solve/{fidelity}/{symmetry}/model{model}_{level}")
     priority: level_priority
     threads: 1
     resources:
@@ -57,7 +57,7 @@ rule solve:
         runtime=24 * 60,
         mumps_out_of_core=out_of_core,
     params:
-        checkpoint="results/checkpoints/{fidelity}/{symmetry}/model{model}_{level}.npz",
+        checkpoint=paths.checkpoint("{fidelity}/{symmetry}/model{model}_{level}"),
         end=convergence_only_end,
         wall=solve_wall,
         launcher=solve_launcher,

@@ -11,11 +11,11 @@ if STABILITY_CASES:
         input:
             mesh=stability_mesh,
         output:
-            "results/stability/{case}.nc",
+            paths.stability_case(),
         log:
-            "results/logs/stability/{case}.log",
+            paths.log("stability/{case}"),
         benchmark:
-            "results/benchmarks/stability/{case}.tsv"
+            paths.benchmark("stability/{case}")
         wildcard_constraints:
             case="|".join(re.escape(c) for c in STABILITY_CASES),
         threads: 1
@@ -29,23 +29,23 @@ if STABILITY_CASES:
 
     rule stability_dataset:
         input:
-            cases=expand("results/stability/{case}.nc", case=STABILITY_CASES),
+            cases=expand(paths.stability_case(), case=STABILITY_CASES),
         output:
-            nc="results/datasets/stability.nc",
-            md="results/datasets/stability_outcomes.md",
+            nc=paths.dataset("stability"),
+            md=paths.dataset("stability_outcomes", "md"),
         log:
-            "results/logs/stability/dataset.log",
+            paths.log("stability/dataset"),
         threads: 1
         script:
             "../scripts/stability_dataset.py"
 
     rule stability_map:
         input:
-            "results/datasets/stability.nc",
+            paths.dataset("stability"),
         output:
             figure_outputs("stability_map", "Stability"),
         log:
-            "results/logs/stability/stability_map.log",
+            paths.log("stability/stability_map"),
         threads: 1
         params:
             figures=FIGURE_OPTIONS,
