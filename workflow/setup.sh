@@ -49,8 +49,8 @@ done < <(grep -v '^#' workflow/envs/debian.txt)
 # The package itself (pyproject.toml), editable: its dependencies are the two sides above, so --no-deps, and it is
 # built by the venv's setuptools (Debian's, a dependency of python3-pip; >= 64 for an editable install), so
 # --no-build-isolation (no download).
-if ! .venv/bin/pip show -f --disable-pip-version-check ureterfsi 2>/dev/null | grep -qx "Editable project location: $root" \
-    || [ pyproject.toml -nt .venv/.ureterfsi-editable ]; then
+installed=$(.venv/bin/pip show --disable-pip-version-check ureterfsi 2>/dev/null || true)
+if ! grep -qx "Editable project location: $root" <<< "$installed" || [ pyproject.toml -nt .venv/.ureterfsi-editable ]; then
   echo "setup: installing ureterfsi into .venv (pip install -e .)"
   .venv/bin/pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
   touch .venv/.ureterfsi-editable
