@@ -12,7 +12,7 @@ designs     design studies: parameter space and expansion, rung check, results
 analyses    post-processing of finished runs: figure data, grid convergence index, the model ladder (no dolfinx)
 plotting    figures: house style and atomic save, the paper's figures, fields, ladder, designs, stability map
 data        files and metadata: read-back checks, the CF registry, provenance, field-file reading, tables (no dolfinx)
-workflow    what the Snakemake workflow needs: script logging, the machine's memory, every results/ path
+workflow    what the Snakemake workflow needs: script logging, the machine's memory, every results/ path, resources
 """
 
 # netCDF4 must load its bundled HDF5 before dolfinx loads Debian's MPI-HDF5: the other order

@@ -1,5 +1,6 @@
 # Shared part of the workflow rules: lists derived from the config, the local memory budget, wildcard
-# constraints, and every function the rule files call (input functions, params, resources).
+# constraints, and every function the rule files call (input functions, params, resources; the resource decisions
+# themselves: ureterfsi.workflow.resources, the paths: ureterfsi.workflow.paths).
 import json
 import sys
 
@@ -20,6 +21,7 @@ from ureterfsi.config import (
     wall_sections,
 )
 from ureterfsi.workflow import paths
+from ureterfsi.workflow import resources as decide
 from ureterfsi.workflow.machine import physical_memory_mib
 from ureterfsi.stability import case_by_name, case_setup
 from ureterfsi.stability import cases as stability_cases
@@ -64,8 +66,7 @@ STABILITY_CASES = (
 CLUSTER_RUN = workflow.resource_settings.nodes is not None
 if not CLUSTER_RUN and "mem_mb" not in workflow.global_resources:
     workflow.register_resource(
-        "mem_mb",
-        physical_memory_mib() - int(config["study"]["memory_headroom_mb"]),
+        "mem_mb", decide.local_memory_budget(config, physical_memory_mib())
     )
 
 
@@ -113,28 +114,13 @@ def figure_outputs(stem, category="Paper figures"):
 
 
 def level_priority(w):
-    """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
-    run of the mesh study is the critical path of the default reproduction: it starts as soon as its mesh exists
-    and the memory budget allows, and the coarse runs fill the other core around it)."""
-    factors = sorted(
-        {float(v["size_factor"]) for v in config["mesh"]["levels"].values()},
-        reverse=True,
-    )
-    return factors.index(float(config["mesh"]["levels"][w.level]["size_factor"]))
+    """Scheduling priority of a level's mesh and solve jobs (decide.level_priority: finer levels first)."""
+    return decide.level_priority(config, w.level)
 
 
 def solve_mem_mb(fidelity, symmetry, level):
-    """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
-    their fidelity's entry for the level (a level without one: that fidelity's largest entry; the entries are
-    for quarter meshes) times the symmetry's factor."""
-    table = config["study"]["memory_mb"]
-    if symmetry == "axisymmetric":
-        return int(table["axisymmetric"])
-    per_level = table[fidelity]
-    return int(
-        per_level.get(level, max(per_level.values()))
-        * table["symmetry_factor"][symmetry]
-    )
+    """MiB a solve reserves (resource mem_mb; ureterfsi.workflow.resources.solve_mem_mb)."""
+    return decide.solve_mem_mb(config, fidelity, symmetry, level)
 
 
 def memory_budget():
@@ -147,17 +133,23 @@ def memory_budget():
     return getattr(budget, "raw", budget)
 
 
-def out_of_core(w):
-    """1 for a fully coupled solve that reserves more memory than one job may hold (memory_budget; a local run
-    caps its reservation at the budget, a cluster run at the node's memory): MUMPS then keeps its factors on
-    disk, the same solution in a fraction of the memory (docs/performance.md); else 0. A resource, not a param:
-    it does not change the solution, so a changed budget must not re-run a finished solve (params are a rerun
-    trigger)."""
-    budget = memory_budget()
-    reserved = solve_mem_mb(w.fidelity, w.symmetry, w.level)
-    return int(
-        w.fidelity == "fully_coupled" and budget is not None and reserved > int(budget)
-    )
+def study_rung(w):
+    """(fidelity, symmetry, level) of a study solve: its wildcards."""
+    return w.fidelity, w.symmetry, w.level
+
+
+def ladder_rung(w):
+    """(fidelity, symmetry, level) of a ladder rung (config ladder.rungs)."""
+    rung = config["ladder"]["rungs"][w.rung]
+    return rung["fidelity"], rung["symmetry"], rung["level"]
+
+
+def out_of_core(rung):
+    """Resource mumps_out_of_core of a solve whose (fidelity, symmetry, level) is rung(w): decide.out_of_core
+    against memory_budget (a local run caps its reservation at the budget, a cluster run at the node's memory).
+    A resource, not a param: it does not change the solution, so a changed budget must not re-run a finished
+    solve (params are a rerun trigger)."""
+    return lambda w: decide.out_of_core(config, *rung(w), memory_budget())
 
 
 def refuse_unmakeable(w):
@@ -178,10 +170,9 @@ def run_config_file(model):
     return paths.run_config(model)
 
 
-def mpi_solve(fidelity, symmetry):
-    """Whether a solve may run on several MPI ranks: the fully coupled rung in 3D (the one-way rung and
-    the r-z runs are serial)."""
-    return fidelity == "fully_coupled" and symmetry != "axisymmetric"
+def solve_mpi(rung):
+    """Resource mpi of a solve whose (fidelity, symmetry, level) is rung(w) (decide.mpi_resource)."""
+    return lambda w: decide.mpi_resource(*rung(w)[:2])
 
 
 def solve_job_mem_mb(w):
@@ -190,37 +181,21 @@ def solve_job_mem_mb(w):
     """
     need = solve_mem_mb(w.fidelity, w.symmetry, w.level)
     node = config["cluster"]["mem_mb_per_node"]
-    if node is not None and need > node and not out_of_core(w):
+    if node is not None and need > node and not out_of_core(study_rung)(w):
         raise WorkflowError(
-            f"results/runs/{w.fidelity}/{w.symmetry}/model{w.model}_{w.level}.nc needs {need} MiB "
+            f"{paths.run(w.fidelity, w.symmetry, w.model, w.level)} needs {need} MiB "
             f"(study.memory_mb), more than a node has (cluster.mem_mb_per_node: {node})"
         )
     return need
 
 
-def solve_mpi(w):
-    """Resource mpi of a solve: the local launcher for an MPI-capable solve, none (a serial job) otherwise."""
-    return "mpiexec" if mpi_solve(w.fidelity, w.symmetry) else None
-
-
-def launcher(fidelity, symmetry, resources):
-    """The interpreter of `-m ureterfsi.study`, behind `{resources.mpi} -n {resources.tasks}` when an
-    MPI-capable solve has more than one task."""
-    tasks = int(resources.get("tasks", 1))
-    if tasks > 1 and mpi_solve(fidelity, symmetry):
-        return f"{resources.mpi} -n {tasks} {sys.executable}"
-    return sys.executable
-
-
-def solve_launcher(wildcards, resources):
-    """launcher() of a study solve (a function of resources: Snakemake keeps it out of the rerun triggers)."""
-    return launcher(wildcards.fidelity, wildcards.symmetry, resources)
-
-
-def ladder_launcher(wildcards, resources):
-    """launcher() of a ladder rung (config ladder.rungs)."""
-    rung = config["ladder"]["rungs"][wildcards.rung]
-    return launcher(rung["fidelity"], rung["symmetry"], resources)
+def solve_launcher(rung):
+    """Params function: the interpreter of `-m ureterfsi.study`, behind the MPI launcher for several tasks
+    (decide.launcher; a function of resources: Snakemake keeps it out of the rerun triggers).
+    """
+    return lambda w, resources: decide.launcher(
+        *rung(w)[:2], resources.get("tasks", 1), resources.get("mpi"), sys.executable
+    )
 
 
 def solve_inputs(w):

@@ -27,24 +27,21 @@ if LADDER:
             paths.benchmark("ladder/{rung}")
         threads: 1
         resources:
-            mem_mb=lambda w: solve_mem_mb(
-                **{
-                    k: LADDER_RUNGS[w.rung][k]
-                    for k in ("fidelity", "symmetry", "level")
-                }
-            ),
+            mem_mb=lambda w: solve_mem_mb(*ladder_rung(w)),
             runtime=24 * 60,
+            mumps_out_of_core=out_of_core(ladder_rung),
         params:
             rung=lambda w: LADDER_RUNGS[w.rung],
             end=LADDER["end"],
             model=LADDER["model"],
-            launcher=ladder_launcher,
+            launcher=solve_launcher(ladder_rung),
             checkpoint=paths.checkpoint("ladder/{rung}"),
         shell:
             "{params.launcher} -m ureterfsi.study"
             " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
             " --symmetry {params.rung[symmetry]} --fidelity {params.rung[fidelity]} --mesh {input.mesh}"
             " --out {output} --checkpoint {params.checkpoint} --end {params.end} --dt {params.rung[dt]}"
+            " --out-of-core {resources.mumps_out_of_core}"
             " > {log} 2>&1"
 
     rule ladder:

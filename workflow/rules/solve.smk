@@ -52,15 +52,15 @@ rule solve:
     threads: 1
     resources:
         tasks=1,
-        mpi=solve_mpi,
+        mpi=solve_mpi(study_rung),
         mem_mb=solve_job_mem_mb,
         runtime=24 * 60,
-        mumps_out_of_core=out_of_core,
+        mumps_out_of_core=out_of_core(study_rung),
     params:
         checkpoint=paths.checkpoint("{fidelity}/{symmetry}/model{model}_{level}"),
         end=convergence_only_end,
         wall=solve_wall,
-        launcher=solve_launcher,
+        launcher=solve_launcher(study_rung),
     shell:
         "{params.launcher} -m ureterfsi.study"
         " --run-config {input.config} --model {wildcards.model} --level {wildcards.level}"

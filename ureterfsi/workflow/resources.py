@@ -1,0 +1,59 @@
+"""The workflow's resource decisions as plain functions of the configuration: the local memory budget, a solve's
+memory reservation and out-of-core factorisation, the scheduling priority of a level, and the MPI launcher of
+a solve's command line. workflow/rules/common.smk wraps them for the rules."""
+from __future__ import annotations
+
+import sys
+
+
+def local_memory_budget(cfg: dict, physical_mib: int) -> int:
+    """MiB a local run may reserve in all (global resource mem_mb): the machine's memory less
+    study.memory_headroom_mb."""
+    return int(physical_mib) - int(cfg["study"]["memory_headroom_mb"])
+
+
+def level_priority(cfg: dict, level: str) -> int:
+    """Scheduling priority of a level's mesh and solve jobs: finer levels first (longest job first: the fine
+    run of the mesh study is the critical path of the default reproduction)."""
+    levels = cfg["mesh"]["levels"]
+    factors = sorted({float(v["size_factor"]) for v in levels.values()}, reverse=True)
+    return factors.index(float(levels[level]["size_factor"]))
+
+
+def solve_mem_mb(cfg: dict, fidelity: str, symmetry: str, level: str) -> int:
+    """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
+    their fidelity's entry for the level (a level without one: that fidelity's largest entry; the entries are
+    for quarter meshes) times the symmetry's factor."""
+    table = cfg["study"]["memory_mb"]
+    if symmetry == "axisymmetric":
+        return int(table["axisymmetric"])
+    per_level = table[fidelity]
+    return int(per_level.get(level, max(per_level.values())) * table["symmetry_factor"][symmetry])
+
+
+def out_of_core(cfg: dict, fidelity: str, symmetry: str, level: str, budget_mb) -> int:
+    """1 for a fully coupled solve that reserves more memory than the local budget (None: no budget, a
+    cluster run) holds: MUMPS then keeps its factors on disk, the same solution in a fraction of the memory
+    (docs/performance.md); else 0."""
+    reserved = solve_mem_mb(cfg, fidelity, symmetry, level)
+    return int(fidelity == "fully_coupled" and budget_mb is not None and reserved > int(budget_mb))
+
+
+def mpi_solve(fidelity: str, symmetry: str) -> bool:
+    """Whether a solve may run on several MPI ranks: the fully coupled rung in 3D (the one-way rung and the
+    r-z runs are serial)."""
+    return fidelity == "fully_coupled" and symmetry != "axisymmetric"
+
+
+def mpi_resource(fidelity: str, symmetry: str) -> str | None:
+    """Resource mpi of a solve: the local launcher for an MPI-capable solve, none (a serial job) otherwise."""
+    return "mpiexec" if mpi_solve(fidelity, symmetry) else None
+
+
+def launcher(fidelity: str, symmetry: str, tasks: int = 1, mpi: str | None = None,
+             python: str = sys.executable) -> str:
+    """The interpreter of `-m ureterfsi.study`, behind `<mpi> -n <tasks>` when an MPI-capable solve has more
+    than one task."""
+    if int(tasks) > 1 and mpi_solve(fidelity, symmetry):
+        return f"{mpi} -n {int(tasks)} {python}"
+    return python
