@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .linear_solvers import MUMPS_WORKSPACE_PERCENT, Mumps
+from .linear_solvers import KRYLOV, MUMPS_WORKSPACE_PERCENT, Mumps
 
 # the values of the options that name a choice
 CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
@@ -120,3 +120,29 @@ class SolverOptions:
             if value not in allowed:
                 names = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
                 raise ValueError(f"{key} {names}, got {value!r}")
+
+    def check(self, fluid: bool = True, solid: bool = True, prescribed_motion: bool = False) -> None:
+        """ValueError on a value outside its choices (check_choices) or on options that do not go together, for a
+        scene with (or without) a fluid region, solid regions and a prescribed ALE map (Scene.mesh_motion)."""
+        self.check_choices()
+        segregated = self.mesh_motion_coupling == "segregated"
+        if segregated and (solid or not fluid):
+            raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
+        if prescribed_motion and not segregated:
+            raise ValueError("Scene.mesh_motion (a prescribed ALE map) needs mesh_motion_coupling 'segregated'")
+        if self.linear_solver == "fieldsplit" and not segregated:
+            raise ValueError("linear_solver 'fieldsplit' preconditions the fluid-alone (v, p) system: it needs "
+                             "mesh_motion_coupling 'segregated'; use a direct solver for coupled FSI")
+        if self.linear_solver in KRYLOV and segregated:
+            raise ValueError(f"linear_solver {self.linear_solver!r} preconditions the coupled FSI system: it needs "
+                             "mesh_motion_coupling 'monolithic'")
+        if self.mesh_jacobian_stiffening < 0.0:
+            raise ValueError(f"mesh_jacobian_stiffening >= 0, got {self.mesh_jacobian_stiffening!r}")
+        if self.mesh_jacobian_stiffening and (segregated or self.coupling_scheme != "monolithic"
+                                              or self.linear_solver in KRYLOV):
+            raise ValueError("mesh_jacobian_stiffening > 0 (a nonlinear mesh motion) needs mesh_motion_coupling "
+                             "'monolithic', coupling_scheme 'monolithic' and a direct linear_solver (the others keep "
+                             "the mesh block's operator fixed)")
+        if self.coupling_scheme == "partitioned" and (segregated or not fluid or not solid):
+            raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
+                             "mesh_motion_coupling 'monolithic'")

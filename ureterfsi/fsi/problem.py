@@ -34,7 +34,7 @@ from .constraints import Constraints
 from .dofs import DofLayout
 from .end_conditions import STEADY_PASSES, EndConditions
 from .linearly_implicit import LinearlyImplicitStep
-from .linear_solvers import (KRYLOV, BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
+from .linear_solvers import (BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              forget_options, owner_prefix)
 from .materials import MooneyRivlin
 from .mesh_motion import MeshMotionMethods, cell_stiffness
@@ -56,7 +56,6 @@ class MonolithicFSI(MeshMotionMethods):
     def __init__(self, scene: Scene, options: SolverOptions | None = None):
         self.scene = scene
         self.options = opts = options or SolverOptions()
-        opts.check_choices()
         mesh = scene.mesh
         self.mesh = mesh
         self.comm = mesh.comm
@@ -68,23 +67,7 @@ class MonolithicFSI(MeshMotionMethods):
         solid_tags = tuple(t for s in scene.solids for t in s.tags)
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
         self.segregated = opts.mesh_motion_coupling == "segregated"
-        if self.segregated and (solid_tags or not fluid_tags):
-            raise ValueError("segregated mesh motion needs a fluid-alone scene (its boundary motion prescribed)")
-        if scene.mesh_motion is not None and not self.segregated:
-            raise ValueError("Scene.mesh_motion (a prescribed ALE map) needs mesh_motion_coupling 'segregated'")
-        if opts.linear_solver == "fieldsplit" and not self.segregated:
-            raise ValueError("linear_solver 'fieldsplit' preconditions the fluid-alone (v, p) system: it needs "
-                             "mesh_motion_coupling 'segregated'; use a direct solver for coupled FSI")
-        if opts.linear_solver in KRYLOV and self.segregated:
-            raise ValueError(f"linear_solver {opts.linear_solver!r} preconditions the coupled FSI system: it needs "
-                             "mesh_motion_coupling 'monolithic'")
-        if opts.mesh_jacobian_stiffening < 0.0:
-            raise ValueError(f"mesh_jacobian_stiffening >= 0, got {opts.mesh_jacobian_stiffening!r}")
-        if opts.mesh_jacobian_stiffening and (self.segregated or opts.coupling_scheme != "monolithic"
-                                              or opts.linear_solver in KRYLOV):
-            raise ValueError("mesh_jacobian_stiffening > 0 (a nonlinear mesh motion) needs mesh_motion_coupling "
-                             "'monolithic', coupling_scheme 'monolithic' and a direct linear_solver (the others keep "
-                             "the mesh block's operator fixed)")
+        opts.check(bool(fluid_tags), bool(solid_tags), scene.mesh_motion is not None)
 
         # --- mixed space --------------------------------------------------------------------
         elements = {"velocity": ufl.VectorElement("Lagrange", cell, opts.velocity_degree),
@@ -302,9 +285,6 @@ class MonolithicFSI(MeshMotionMethods):
     def _partitioned(self, whole: forms.ResidualTerms, terms) -> PartitionedCoupling:
         """The partitioned strategy (fsi.block_forms.partitioned_coupling) on the residual's terms `whole` and
         `terms`(dx, ds), the same terms with other measures."""
-        if self.segregated or not self.fluid_tags or not self.solid_tags:
-            raise ValueError("coupling_scheme 'partitioned' splits a coupled scene (a fluid and a solid region) with "
-                             "mesh_motion_coupling 'monolithic'")
         return partitioned_coupling(self, whole, terms)
 
     def factor_matrix(self):
