@@ -2,7 +2,8 @@
 
 log         the body of every workflow script: logging into the rule's log, one-line errors
 machine     the machine's physical memory (the local memory budget)
+memory_plan the ranks' measured peaks of finished runs against their reservations; the study.memory_mb that covers them
 paths       every results/ path of the workflow (the rules and the package read them here)
 resources   memory budget and reservations, out-of-core factorisation, priorities, the MPI launcher of a solve
 """
-__all__ = ["log", "machine", "paths", "resources"]
+__all__ = ["log", "machine", "memory_plan", "paths", "resources"]
