@@ -67,6 +67,13 @@ class MonolithicFSI(MeshMotionMethods):
         solid_tags = tuple(t for s in scene.solids for t in s.tags)
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
         self.segregated = opts.mesh_motion_coupling == "segregated"
+        lumped = any(ob.condition is not None for ob in scene.open_boundaries)
+        if lumped and opts.coupling_scheme != "monolithic":
+            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs coupling_scheme "
+                             "'monolithic' (the partitioned sweeps do not carry its Jacobian term)")
+        if lumped and opts.urine_step != "newton":
+            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs urine_step "
+                             "'newton' (the linearly implicit step does not carry its Jacobian term)")
         opts.check(bool(fluid_tags), bool(solid_tags), scene.mesh_motion is not None)
 
         # --- mixed space --------------------------------------------------------------------
@@ -121,12 +128,6 @@ class MonolithicFSI(MeshMotionMethods):
 
         # --- residual -----------------------------------------------------------------------
         self.end_conditions = ends = EndConditions(self, v, u, dudt, phi)
-        if ends and opts.coupling_scheme != "monolithic":
-            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs coupling_scheme "
-                             "'monolithic' (the partitioned sweeps do not carry its Jacobian term)")
-        if ends and opts.urine_step != "newton":
-            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs urine_step "
-                             "'newton' (the linearly implicit step does not carry its Jacobian term)")
 
         def terms(dx, ds=ds, convecting=None):
             return forms.residual_terms(ops, scene, X, tests, dvdt, dudt, self.t, dx, ds, convecting,
