@@ -20,6 +20,11 @@ from _compare import assert_same_arithmetic
 from ureterfsi.study.coupled import run
 from ureterfsi.study.options import RunSpec
 
+# a run's totals over its own window (ureterfsi.study.stent_surface): TAWSS, OSI, low-WSS fraction, hole volumes
+RUN_TOTALS = ({f"{region}_{stat}" for region in ("stent_outer", "stent_lumen", "hole_wall")
+               for stat in ("tawss", "osi", "low_wss_area_fraction")}
+              | {"hole_gross_exchange_volume", "hole_net_volume", "hole_active"})
+
 
 def _run(tmp_path, configs, model="3", level="coarse", symmetry="quarter", end=None, solve=run):
     cfg = load_config_files(configs)
@@ -254,10 +259,13 @@ def test_out_of_core_run_from_the_command_line_is_the_in_core_run(mini, mini_dir
         early = ds.sel(time=ooc["time"].values, probe_time=ooc["probe_time"].values)
         early = early.isel(step=range(ooc.sizes["step"]))
         for name, var in ooc.data_vars.items():
-            if "wall_time" in name:
-                continue
+            if "wall_time" in name or name in RUN_TOTALS:
+                continue    # timings; totals over each run's own window (the in-core run is longer)
             ref = early[name].values
             if name == "newton_residual":       # a converged residual: round-off of the state
                 np.testing.assert_allclose(var.values, ref, rtol=1e-6)
             else:
-                np.testing.assert_allclose(var.values, ref, rtol=0, atol=1e-11 * np.nanmax(np.abs(ref)), err_msg=name)
+                scale = np.nanmax(np.abs(ref))
+                if name.endswith("_reflux_volume"):    # round-off of a face's flux: the volume it carried is the scale
+                    scale = max(scale, np.nanmax(np.abs(early["inlet_flux"].values)) * 0.04)
+                np.testing.assert_allclose(var.values, ref, rtol=0, atol=1e-11 * scale, err_msg=name)
