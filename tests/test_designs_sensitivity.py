@@ -211,3 +211,19 @@ def test_dry_run_of_a_saltelli_study(tmp_path):
     # and the rung check's 4 corners of the bounds on the 10 mm segment (one mesh, a wall each, two solves each)
     assert counts == {"design_solve": 16, "design_mesh": 1 + 1, "design_wall_motion": 16 + 4, "design_dataset": 1,
                       "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts
+
+
+def test_point_scalars_carry_the_end_conditions_outcome():
+    """The peak pelvic pressure and the reflux volumes (their last values: they accumulate from t = 0) of a run with
+    a renal pelvis; NaN for a run with the paper's open ends (no such record)."""
+    from ureterfsi.designs.results import END_CONDITIONS, point_scalars
+
+    t = np.linspace(0.0, 0.04, 3)
+    base = {"outlet_flux": ("time", [0.0, 1e-9, 5e-10]), "max_wall_displacement": ("time", [0.0, 1e-5, 2e-5])}
+    ends = {"pelvic_pressure": ("time", [130.0, 1114.0, 1090.0]),
+            "stent_lumen_reflux_volume": ("time", [0.0, 2e-10, 5e-10]),
+            "annulus_reflux_volume": ("time", [0.0, 3e-8, 6.6e-8])}
+    got = point_scalars(xr.Dataset(base | ends, coords={"time": t}))
+    assert (got["peak_pelvic_pressure"], got["reflux_volume_lumen"], got["reflux_volume_annulus"]) == (1114.0, 5e-10, 6.6e-8)
+    open_ends = point_scalars(xr.Dataset(base, coords={"time": t}))
+    assert all(np.isnan(open_ends[k]) for k in END_CONDITIONS)

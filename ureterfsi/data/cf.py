@@ -127,6 +127,11 @@ VARIABLES = {
                                            "hole at the comparison time"),
     "mean_outlet_flux": ("m3 s-1", "time mean of the outlet volumetric flow rate over the run"),
     "backflow_volume": ("m3", "volume flowing back in through the outlet, integral of max(-Q_out, 0) dt"),
+    "peak_pelvic_pressure": ("Pa", "maximum over the run of the renal pelvis pressure (pelvic_pressure)"),
+    "reflux_volume_lumen": ("m3", "volume of urine moved toward the kidney through the kidney end face inside the "
+                                  "stent lumen over the run"),
+    "reflux_volume_annulus": ("m3", "volume of urine moved toward the kidney through the kidney end face outside the "
+                                    "stent over the run"),
     "peak_hole_flux": ("m3 s-1", "maximum over time of |volumetric flow rate| through each side hole"),
     "hole_exchange_volume": ("m3", "integral over time of |volumetric flow rate| through each side hole"),
     "hole_exchange_fraction": ("1", "volume exchanged through all side holes, sum of integral |Q_hole| dt, over "

@@ -26,9 +26,11 @@ STENT_SURFACE = tuple(f"stent_{r}_{k}" for r in ("outer", "lumen") for k in ("ta
 HOLE_SURFACE = ("hole_wall_tawss", "hole_wall_osi", "hole_wall_low_wss_area_fraction", "hole_gross_exchange_volume",
                 "hole_net_volume", "hole_active")
 PER_HOLE = ("peak_hole_flux", "hole_exchange_volume") + HOLE_SURFACE
+# the end conditions' outcome (ureterfsi.study.end_probes): NaN for a run with the paper's open ends
+END_CONDITIONS = ("peak_pelvic_pressure", "reflux_volume_lumen", "reflux_volume_annulus")
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
-           "wall_time", "peak_pressure_drop", "mean_pressure_drop") + STENT_SURFACE + HOLE_SURFACE
+           "wall_time", "peak_pressure_drop", "mean_pressure_drop") + STENT_SURFACE + HOLE_SURFACE + END_CONDITIONS
 QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",   # figures, indices
               "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop")
 SOBOL_INDICES = {"sobol_first_order": "S1", "sobol_first_order_conf": "S1_conf",   # dataset name: SALib's key
@@ -67,6 +69,17 @@ def pressure_drop_scalars(run) -> dict:
     return {"peak_pressure_drop": float(np.max(np.abs(dp))), "mean_pressure_drop": _trapz(dp, t) / (t[-1] - t[0])}
 
 
+def end_condition_scalars(run) -> dict:
+    """The peak renal pelvis pressure and the urine moved toward the kidney over the run, inside the stent lumen and
+    outside it (the reflux volumes' last values: they accumulate from t = 0); NaN where the run has no such record."""
+    def last(name):
+        return float(run[name].values[-1]) if name in run else np.nan
+
+    return {"peak_pelvic_pressure": float(np.max(run["pelvic_pressure"].values)) if "pelvic_pressure" in run else np.nan,
+            "reflux_volume_lumen": last("stent_lumen_reflux_volume"),
+            "reflux_volume_annulus": last("annulus_reflux_volume")}
+
+
 def point_scalars(run) -> dict:
     """The scalars of one run dataset (ureterfsi.study.probes.probes_dataset); hole flows per hole."""
     t = run["time"].values.astype(float)
@@ -90,7 +103,8 @@ def point_scalars(run) -> dict:
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
             "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run) | {
         k: float(run[k]) if k in run else np.nan for k in STENT_SURFACE} | {
-        k: run[k].values.astype(float) if k in run else np.full(hole.shape[0], np.nan) for k in HOLE_SURFACE}
+        k: run[k].values.astype(float) if k in run else np.full(hole.shape[0], np.nan) for k in HOLE_SURFACE} | (
+        end_condition_scalars(run))
 
 
 def mesh_motion_variables(points, runs) -> dict:
