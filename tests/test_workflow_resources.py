@@ -52,3 +52,14 @@ def test_the_shipped_configuration_reserves_what_its_table_says():
     cfg = load_config_files([REPO / "config" / "config.yaml"])
     table = yaml.safe_load((REPO / "config" / "config.yaml").read_text())["study"]["memory_mb"]
     assert r.solve_mem_mb(cfg, "one_way", "quarter", "coarse") == int(table["one_way"]["coarse"])
+
+
+def test_a_solve_larger_than_a_node_is_refused_unless_it_can_go_out_of_core(cfg):
+    one_way = r.solve_mem_mb(cfg, "one_way", "quarter", "fine")
+    assert r.node_refusal(cfg, "one_way", "quarter", "fine", None) == ""               # node size unknown
+    assert r.node_refusal(cfg, "one_way", "quarter", "fine", one_way) == ""            # fits exactly
+    why = r.node_refusal(cfg, "one_way", "quarter", "fine", one_way - 1)
+    assert why == (f"needs {one_way} MiB (study.memory_mb), more than a node has "
+                   f"(cluster.mem_mb_per_node: {one_way - 1})")
+    coupled = r.solve_mem_mb(cfg, "fully_coupled", "quarter", "fine")
+    assert r.node_refusal(cfg, "fully_coupled", "quarter", "fine", coupled - 1) == ""  # factors on disk instead

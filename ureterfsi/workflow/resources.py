@@ -39,6 +39,15 @@ def out_of_core(cfg: dict, fidelity: str, symmetry: str, level: str, budget_mb) 
     return int(fidelity == "fully_coupled" and budget_mb is not None and reserved > int(budget_mb))
 
 
+def node_refusal(cfg: dict, fidelity: str, symmetry: str, level: str, node_mb) -> str:
+    """Why a solve cannot run on a node of `node_mb` MiB (cluster.mem_mb_per_node; None: unknown), '' if it can: it
+    reserves more than the node has and cannot keep its factors on disk (out_of_core against the node)."""
+    need = solve_mem_mb(cfg, fidelity, symmetry, level)
+    if node_mb is None or need <= int(node_mb) or out_of_core(cfg, fidelity, symmetry, level, node_mb):
+        return ""
+    return f"needs {need} MiB (study.memory_mb), more than a node has (cluster.mem_mb_per_node: {int(node_mb)})"
+
+
 def mpi_solve(fidelity: str, symmetry: str) -> bool:
     """Whether a solve may run on several MPI ranks: the fully coupled rung in 3D (the one-way rung and the
     r-z runs are serial)."""

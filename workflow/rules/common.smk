@@ -59,7 +59,7 @@ STABILITY_CASES = (
 # Memory budget of local runs. Solves reserve mem_mb (study.memory_mb), but Snakemake holds reservations only
 # against a global `--resources mem_mb=...`, which the command line or a profile sets - and the workflow profile
 # under workflow/profiles/ is not searched when the Snakefile sits at the repository root. Without a budget a
-# plain `snakemake --cores 2` started the fine and medium runs side by side (15.6 + 8.8 GiB on 24 GiB). So
+# plain `snakemake --cores 2` started the fine and medium runs side by side, more than the machine holds (docs/performance.md, Memory). So
 # unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb. A cluster run
 # (--jobs: resource_settings.nodes; the executor itself is not known yet when the Snakefile is read) gets none:
 # its scheduler holds each job's mem_mb, and a budget of the submit host's memory would cap every job's.
@@ -179,14 +179,14 @@ def solve_job_mem_mb(w):
     """Resource mem_mb of a solve (solve_mem_mb). On a cluster, a solve that needs more than a node has
     (cluster.mem_mb_per_node) and cannot keep its factors on disk (out_of_core) is refused before submission.
     """
-    need = solve_mem_mb(w.fidelity, w.symmetry, w.level)
-    node = config["cluster"]["mem_mb_per_node"]
-    if node is not None and need > node and not out_of_core(study_rung)(w):
+    why = decide.node_refusal(
+        config, w.fidelity, w.symmetry, w.level, config["cluster"]["mem_mb_per_node"]
+    )
+    if why:
         raise WorkflowError(
-            f"{paths.run(w.fidelity, w.symmetry, w.model, w.level)} needs {need} MiB "
-            f"(study.memory_mb), more than a node has (cluster.mem_mb_per_node: {node})"
+            f"{paths.run(w.fidelity, w.symmetry, w.model, w.level)} {why}"
         )
-    return need
+    return solve_mem_mb(w.fidelity, w.symmetry, w.level)
 
 
 def solve_launcher(rung):
