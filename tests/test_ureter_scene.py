@@ -14,6 +14,7 @@ from ureterfsi.config import load_config_files
 from ureterfsi.mesh.build import build_mesh
 from ureterfsi.scenes.ureter import pulse_sigma, peristaltic_pressure
 from ureterfsi.analyses import ladder
+from ureterfsi.designs.results import HOLE_SURFACE, STENT_SURFACE
 from ureterfsi.study import oneway
 
 from _compare import assert_same_arithmetic
@@ -21,9 +22,7 @@ from ureterfsi.study.coupled import run
 from ureterfsi.study.options import RunSpec
 
 # a run's totals over its own window (ureterfsi.study.stent_surface): TAWSS, OSI, low-WSS fraction, hole volumes
-RUN_TOTALS = ({f"{region}_{stat}" for region in ("stent_outer", "stent_lumen", "hole_wall")
-               for stat in ("tawss", "osi", "low_wss_area_fraction")}
-              | {"hole_gross_exchange_volume", "hole_net_volume", "hole_active"})
+RUN_TOTALS = set(STENT_SURFACE + HOLE_SURFACE)
 
 
 def _run(tmp_path, configs, model="3", level="coarse", symmetry="quarter", end=None, solve=run):
