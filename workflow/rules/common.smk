@@ -59,8 +59,9 @@ STABILITY_CASES = (
 # Memory budget of local runs. Solves reserve mem_mb (study.memory_mb), but Snakemake holds reservations only
 # against a global `--resources mem_mb=...`, which the command line or a profile sets - and the workflow profile
 # under workflow/profiles/ is not searched when the Snakefile sits at the repository root. Without a budget a
-# plain `snakemake --cores 2` started the fine and medium runs side by side, more than the machine holds (docs/performance.md, Memory). So
-# unless one is given, a local run budgets the machine's memory less study.memory_headroom_mb. A cluster run
+# plain `snakemake --cores 2` started the fine and medium runs side by side, more than the machine holds
+# (docs/performance.md, Memory). So unless one is given, a local run budgets the machine's memory less
+# study.memory_headroom_mb. A cluster run
 # (--jobs: resource_settings.nodes; the executor itself is not known yet when the Snakefile is read) gets none:
 # its scheduler holds each job's mem_mb, and a budget of the submit host's memory would cap every job's.
 CLUSTER_RUN = workflow.resource_settings.nodes is not None
