@@ -1,19 +1,20 @@
-"""Cross-key consistency checks of a schema-valid configuration, per section, run in order (CHECKS), and
-check_config: the schema, then CHECKS."""
+"""Cross-key consistency checks of a schema-valid configuration that poses a solve (geometry, models, time, mesh,
+peristalsis, ureter material), the order every check runs in (CHECKS; RUN_CHECKS for one solve), and check_config:
+the schema, then CHECKS. The occlusion's checks are in occlusion, the end conditions' in ends, those of the sections
+that plan the study in study_checks."""
 from __future__ import annotations
 
 import math
 
-from ureterfsi.config.end_pressures import one_way_refusal
-from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions, occluded_holes
+from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
 from ureterfsi.config.ranges import SHEAR_MODULUS
-from ureterfsi.stability.naming import Case
 
-from .errors import ConfigError, fmt
+from .ends import check_ends
+from .errors import RTOL, ConfigError, fmt
+from .occlusion import check_occlusion, check_occlusion_rungs
 from .plausible import check_plausible, implausible
 from .schema import validate_schema
-
-RTOL = 1e-9  # relative slack of the floating-point comparisons of exact design ratios (e.g. 0.5/0.125 = 4)
+from .study_checks import check_figures, check_ladder, check_runs, check_stability, check_study
 
 # Bounds of the consistency checks (documented in the messages).
 MIN_GAP_HOLE_DIAMETERS = 2.0     # fluid gap stent-ureter >= 2 hole diameters (a hole jet has room to develop)
@@ -99,49 +100,6 @@ def check_stricture(cfg):
                           f"{fmt(st.fraction)} narrows the lumen to radius {fmt(geo.narrowest_radius)} m, a gap of "
                           f"{fmt(gap)} m to the {what}; need >= geometry.stricture_min_gap {fmt(g['stricture_min_gap'])}"
                           f" x the unobstructed {fmt(open_gap)} m (no contact)")
-
-
-def check_occlusion(cfg):
-    """A complete occlusion (geometry.occlusion_length > 0, ureterfsi.mesh.geometry.Occlusion) and its tapers lie inside
-    the segment, apart from the clamped end faces; it is the only narrowing (no stricture) of a coaxial stent
-    (the wall ties onto it all round). A model it cannot pose (stent-free, or a hole under its span) is refused where
-    its mesh is asked for (runs.unmakeable), the one-way rung by check_occlusion_rungs."""
-    g, geo = cfg["geometry"], _geom(cfg)
-    if not geo.occluded:
-        return
-    lo, hi = geo.occlusion.span
-    if not (lo > 0.0 and hi < g["length"]):
-        raise ConfigError("geometry.occlusion_position",
-                          f"the occlusion with its tapers [{fmt(lo)}, {fmt(hi)}] m (occlusion_position -+ "
-                          f"(occlusion_length/2 + occlusion_taper)) must lie inside the segment (0, {fmt(g['length'])}) "
-                          f"m, "
-                          f"apart from the clamped end faces")
-    if geo.strictured:
-        raise ConfigError("geometry.occlusion_length", "a complete occlusion is the segment's narrowing: set "
-                                                       "geometry.stricture_fraction to 0 (one or the other)")
-    if geo.stent_offset:
-        raise ConfigError("geometry.occlusion_length", f"a complete occlusion ties the wall onto a coaxial stent all "
-                                                       f"round: geometry.stent_offset must be 0, got "
-                                                       f"{fmt(geo.stent_offset)}")
-
-
-def occlusion_unposable(cfg: dict, model: str) -> str:
-    """Why a complete occlusion (geometry.occlusion_length > 0) cannot be posed on `model`, '' if it can (or there
-    is none): a stent-free model (the wall would close the ureter), a side-hole pair under the occlusion's span (the
-    wall closes a hole under the contact; under a taper the hole opens into a wedge thinner than itself)."""
-    geo, sm = UreterGeometry.from_config(cfg), StentModel.from_config(cfg, model)
-    if not geo.occluded:
-        return ""
-    if not sm.stent:
-        return (f"model {model} has no stent: a complete occlusion (geometry.occlusion_length > 0) closes the annulus "
-                f"onto the stent, without one it would close the ureter")
-    z = occluded_holes(geo, sm)
-    if z.size:
-        lo, hi = geo.occlusion.span
-        return (f"model {model}: the side-hole pair at z = {fmt(float(z[0]))} m lies under the occlusion's span "
-                f"[{fmt(lo)}, {fmt(hi)}] m (occlusion_position -+ (occlusion_length/2 + occlusion_taper)); move the "
-                f"occlusion or the holes")
-    return ""
 
 
 def check_stent_offset(cfg):
@@ -333,143 +291,6 @@ def check_ureter_material(cfg):
         raise ConfigError("ureter.bulk_modulus",
                           f"must be >= {fmt(MIN_BULK_RATIO)} (c10 + c01) for near-incompressibility (paper §2.3.2), "
                           f"got {fmt(u['bulk_modulus'])} Pa = {ratio:.3g} (c10 + c01)")
-
-
-def check_study(cfg):
-    st = cfg["study"]
-    if st["level"] not in cfg["mesh"]["levels"]:
-        raise ConfigError("study.level", f"must be one of mesh.levels {sorted(cfg['mesh']['levels'])}, "
-                                         f"got {fmt(st['level'])}")
-    if st["convergence_model"] not in cfg["models"]:
-        raise ConfigError("study.convergence_model", f"must be one of models {sorted(cfg['models'])}, "
-                                                     f"got {fmt(st['convergence_model'])}")
-    if not cfg["models"][st["convergence_model"]]["stent"]:
-        raise ConfigError("study.convergence_model", f"model {st['convergence_model']!r} has no stent: the mesh-"
-                                                     f"convergence study (paper §3.1, Fig. 3) compares the stent's "
-                                                     f"von Mises stress along the probe line; name a stented model")
-    if not any(abs(st["convergence_time"] - t) < 1e-12 for t in cfg["time"]["probe_times"]):
-        raise ConfigError("study.convergence_time", f"must be one of time.probe_times "
-                                                    f"{fmt(cfg['time']['probe_times'])}, got {fmt(st['convergence_time'])}")
-
-
-def check_runs(cfg):
-    for model, over in cfg["study"]["runs"].items():
-        key = f"study.runs.{model}"
-        if model not in cfg["models"]:
-            raise ConfigError(key, f"must be a key of models {sorted(cfg['models'])}")
-        if over.get("symmetry") == "axisymmetric" and cfg["models"][model]["stent"]:
-            raise ConfigError(f"{key}.symmetry", "'axisymmetric' is only valid for a model without stent "
-                                                 "(side holes break rotational symmetry)")
-
-
-def check_occlusion_rungs(cfg):
-    """Under a complete occlusion every stented model's study run is fully coupled: the one-way rung's r-z wall
-    moves freely where the 3D wall is tied to the stent (ureterfsi.study.oneway refuses it too)."""
-    if not cfg["geometry"]["occlusion_length"]:
-        return
-    for name in sorted(cfg["models"], key=int):
-        over = cfg["study"]["runs"].get(name, {})
-        if not occlusion_unposable(cfg, name) and over.get("fidelity", cfg["study"]["fidelity"]) == "one_way":
-            key = f"study.runs.{name}.fidelity" if "fidelity" in over else "study.fidelity"
-            raise ConfigError(key, f"one_way cannot pose the complete occlusion (geometry.occlusion_length > 0) of "
-                                   f"model {name}: its r-z wall ignores the tie to the stent; use fully_coupled")
-
-
-def check_ladder(cfg):
-    lad = cfg.get("ladder")
-    if lad is None:
-        return
-    if lad["model"] not in cfg["models"]:
-        raise ConfigError("ladder.model", f"must be one of models {sorted(cfg['models'])}, got {fmt(lad['model'])}")
-    if lad["reference"] not in lad["rungs"]:
-        raise ConfigError("ladder.reference", f"must be one of ladder.rungs {sorted(lad['rungs'])}, "
-                                              f"got {fmt(lad['reference'])}")
-    for name, rung in lad["rungs"].items():
-        if rung["level"] not in cfg["mesh"]["levels"]:
-            raise ConfigError(f"ladder.rungs.{name}.level", f"must be one of mesh.levels "
-                                                            f"{sorted(cfg['mesh']['levels'])}, got {fmt(rung['level'])}")
-        if rung["symmetry"] == "axisymmetric" and cfg["models"][lad["model"]]["stent"]:
-            raise ConfigError(f"ladder.rungs.{name}.symmetry", f"'axisymmetric' needs a model without stent; "
-                                                               f"ladder.model {lad['model']} has one")
-        if rung["dt"] > lad["end"]:
-            raise ConfigError(f"ladder.rungs.{name}.dt", f"must be <= ladder.end = {fmt(lad['end'])} s, "
-                                                         f"got {fmt(rung['dt'])}")
-    first = cfg["time"]["probe_times"][0]
-    if not lad["end"] >= first * (1 - RTOL):
-        raise ConfigError("ladder.end", f"must be >= the first of time.probe_times, {fmt(first)} s (the snapshot "
-                                        f"quantities are compared at the probe times within the window), "
-                                        f"got {fmt(lad['end'])}")
-
-
-def check_figures(cfg):
-    f, probes = cfg["figures"], cfg["time"]["probe_times"]
-    for key in ("wave_times", "hole_velocity_times"):
-        for i, t in enumerate(f[key]):
-            if not any(abs(t - p) < 1e-12 for p in probes):
-                raise ConfigError(f"figures.{key}[{i}]", f"must be one of time.probe_times {fmt(probes)} "
-                                                        f"(the snapshots are taken there), got {fmt(t)}")
-    if "domain_model" in f and f["domain_model"] not in cfg["models"]:
-        raise ConfigError("figures.domain_model", f"must be one of models {sorted(cfg['models'], key=int)}, "
-                                                  f"got {fmt(f['domain_model'])}")
-
-
-def check_stability(cfg):
-    """The `stability` section names existing levels and models fit for its scenes (ureterfsi.stability):
-    the r-z scene a stent-free model, the hole_elements axis a model with side holes; distinct case names."""
-    st = cfg.get("stability")
-    if st is None:
-        return
-    levels, models = cfg["mesh"]["levels"], cfg["models"]
-    if st["level"] not in levels:
-        raise ConfigError("stability.level", f"mesh level {st['level']!r} is not one of mesh.levels {list(levels)}")
-    for i, level in enumerate(st["axes"].get("mesh_level", [])):
-        if level not in levels:
-            raise ConfigError(f"stability.axes.mesh_level[{i}]",
-                              f"mesh level {level!r} is not one of mesh.levels {list(levels)}")
-    if st["model"] not in models:
-        raise ConfigError("stability.model", f"must be one of models {sorted(models, key=int)}, got {st['model']!r}")
-    if models[st["model"]]["stent"]:
-        raise ConfigError("stability.model", f"model {st['model']!r} has a stent: the r-z (axisymmetric) scene "
-                                             f"needs a stent-free model")
-    if st["axes"].get("hole_elements"):
-        model = st["holes"]["model"]
-        if model not in models:
-            raise ConfigError("stability.holes.model", f"must be one of models {sorted(models, key=int)}, "
-                                                       f"got {model!r}")
-        if not (models[model]["stent"] and models[model]["holes"]):
-            raise ConfigError("stability.holes.model", f"model {model!r} has no side holes: the hole_elements "
-                                                       f"axis needs a stented model with holes")
-    if not cfg["time"]["dt"] < st["end"]:
-        raise ConfigError("stability.end", f"must be > time.dt = {fmt(cfg['time']['dt'])} s (the baseline case's "
-                                           f"time step), got {fmt(st['end'])}")
-    for i, dt in enumerate(st["axes"].get("time_step", [])):
-        if not dt < st["end"]:
-            raise ConfigError(f"stability.axes.time_step[{i}]",
-                              f"must be < stability.end = {fmt(st['end'])} s, got {fmt(dt)}")
-    seen = {"baseline": "the baseline"}
-    for axis, values in st["axes"].items():
-        for i, v in enumerate(values):
-            key, name = f"stability.axes.{axis}[{i}]", Case(axis, v).name
-            if name in seen:
-                raise ConfigError(key, f"{fmt(v)} gives the case name {name!r} of {seen[name]} (values are "
-                                       f"named to 3 significant digits)")
-            seen[name] = f"stability.axes.{axis}[{i}]"
-
-
-def check_ends(cfg):
-    """The end conditions can be posed: a closed junction resists backflow at least as much as forward flow, and
-    no study run of the one-way rung has end pressures its wall would ignore (scenes.ends.one_way_refusal)."""
-    b = cfg["ends"]["bladder"]
-    if b["junction_backward_resistance"] < b["junction_forward_resistance"]:
-        raise ConfigError("ends.bladder.junction_backward_resistance",
-                          f"{fmt(b['junction_backward_resistance'])} Pa s/m^3 < junction_forward_resistance "
-                          f"{fmt(b['junction_forward_resistance'])} Pa s/m^3: a one-way valve resists backflow more")
-    study = cfg.get("study")
-    if study and any(over.get("fidelity", study["fidelity"]) == "one_way"
-                     for m, over in ({m: {} for m in cfg["models"]} | study["runs"]).items()):
-        why = one_way_refusal(cfg)
-        if why:
-            raise ConfigError("ends", f"a study run of fidelity one_way: {why}")
 
 
 CHECKS = (

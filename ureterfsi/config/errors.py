@@ -1,5 +1,8 @@
-"""The one error of the configuration layer and the formatting of the values its messages quote."""
+"""The one error of the configuration layer, the formatting of the values its messages quote and the slack of its
+floating-point comparisons (RTOL)."""
 from __future__ import annotations
+
+RTOL = 1e-9  # relative slack of the floating-point comparisons of exact design ratios (e.g. 0.5/0.125 = 4)
 
 
 class ConfigError(ValueError):

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import json
 
-from .checks import check_run_config, occlusion_unposable
+from .checks import check_run_config
 from .errors import ConfigError, fmt
+from .occlusion import occlusion_unposable
 from .schema import schema_defaults
 from .sections import DEFAULTED_RUN_SECTIONS, RUN_SECTIONS
 

@@ -8,7 +8,8 @@ from ureterfsi import REPO_ROOT
 from .checks import check_config
 from .errors import ConfigError
 from .reading import deep_merge, read_yaml
-from .runs import occlusion_unposable, unmakeable
+from .occlusion import occlusion_unposable
+from .runs import unmakeable
 
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 

@@ -1,5 +1,5 @@
 """The names of the stability matrix's cases: plain data importing nothing of the package, so that the
-configuration checks (ureterfsi.config.checks.check_stability) name cases as ureterfsi.stability.cases does."""
+configuration checks (ureterfsi.config.study_checks.check_stability) name cases as ureterfsi.stability.cases does."""
 from __future__ import annotations
 
 import re
