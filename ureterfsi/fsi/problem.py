@@ -11,15 +11,14 @@ dofs outside the Mooney-Rivlin cells. The mesh-motion rows of interface displace
 so the interface moves exactly with the solid kinematics (no mesh-motion pollution): fsi.constraints.
 Time: BDF2 with variable step (Backward Euler for the first step); steady mode switches d/dt off.
 Elsewhere: the options (fsi.options), the residual's terms (fsi.forms, fsi.physics), the dofs per field and split
-(fsi.dofs), Newton's method and its convergence tests (fsi.newton), the linear solvers (fsi.linear_solvers), the
-partitioned sweeps (fsi.partitioned), the segregated mesh motion (fsi.mesh_motion), the matrices' sparsity
-(fsi.sparsity) and the ALE Jacobian guard (fsi.ale_jacobian).
+(fsi.dofs), the problem's Newton system and its assembly (fsi.newton_system), Newton's method and its convergence
+tests (fsi.newton), the BDF history, predictor and restart state (fsi.history), the linear solvers
+(fsi.linear_solvers), the partitioned sweeps (fsi.partitioned), the segregated mesh motion (fsi.mesh_motion), the
+matrices' sparsity (fsi.sparsity) and the ALE Jacobian guard (fsi.ale_jacobian).
 """
 from __future__ import annotations
 
 import logging
-import math
-import time as _time
 import weakref
 
 import numpy as np
@@ -33,12 +32,14 @@ from .ale_jacobian import ALEJacobian
 from .constraints import Constraints
 from .dofs import DofLayout
 from .end_conditions import STEADY_PASSES, EndConditions
+from .history import HistoryMethods
 from .linearly_implicit import LinearlyImplicitStep
 from .linear_solvers import (BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
                              forget_options, owner_prefix)
 from .materials import MooneyRivlin
 from .mesh_motion import MeshMotionMethods, cell_stiffness
 from .newton import Newton, NewtonDivergence
+from .newton_system import NewtonSystemMethods
 from .operators import Operators
 from .options import SolverOptions
 from .block_forms import partitioned_coupling
@@ -49,7 +50,7 @@ from .scene import Scene
 log = logging.getLogger("ureterfsi.fsi")
 
 
-class MonolithicFSI(MeshMotionMethods):
+class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
     """The problem of a `scene` solved with `options`: its mixed space, state and BDF history, forms, constraints
     and solver strategies; `step(dt)` advances it, `solve_steady()` poses a steady state."""
 
@@ -293,126 +294,6 @@ class MonolithicFSI(MeshMotionMethods):
         return self.linear_solver.factor_matrix()
 
     # ---------------------------------------------------------------------------------------
-    def _assemble_residual(self):
-        t0 = _time.perf_counter()
-        if self.end_conditions:
-            self.end_conditions.update()
-        b = self.b
-        with b.localForm() as loc:
-            loc.set(0.0)
-        fem_petsc.assemble_vector(b, self.residual_form)
-        if self.mesh_form is not None:
-            self.assemble_mesh_rows(self.bm)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        b.copy(self._b_free)       # the physics residual before constraints: after a converged step, the reaction
-        if self.mesh_form is not None:
-            b.axpy(1.0, self.bm)
-        fem_petsc.set_bc(b, self.bcs, self.x.vector, -1.0)
-        self.timings["assemble_residual"] += _time.perf_counter() - t0
-        return b.norm()
-
-    def _assemble_jacobian(self):
-        t0 = _time.perf_counter()
-        A = self.A
-        A.zeroEntries()
-        fem_petsc.assemble_matrix(A, self.jacobian_form, bcs=self.bcs)
-        A.assemble()
-        if self.mesh_jacobian_form is not None:
-            A.axpy(1.0, self.mesh_motion_matrix(), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self._jacobian_valid = True
-        self._jacobian_rate = self._rate()
-        self.timings["assemble_jacobian"] += _time.perf_counter() - t0
-
-    def _rate(self) -> float:
-        """b0/dt, the only time-integration coefficient in the Jacobian (0 in steady solves)."""
-        return float(self.bdf[0].value) / float(self.dt.value)
-
-    def _jacobian_current(self) -> bool:
-        """A kept factorisation is only reusable for the same b0/dt: a steady-state Jacobian (no inertia)
-        or one of another step size or BDF order would be reused for a different operator."""
-        return self._jacobian_valid and math.isclose(self._jacobian_rate, self._rate(), rel_tol=1e-12)
-
-    def jacobian_kept(self) -> bool:
-        """A factorisation is kept (of any b0/dt: as a preconditioner, fsi.linearly_implicit)."""
-        return self._jacobian_valid
-
-    def invalidate_jacobian(self):
-        """Force a fresh Jacobian and factorisation (of every block) at the next Newton iteration."""
-        self._jacobian_valid = False
-        self.linear_solver.invalidate()
-        if self.partitioned is not None:
-            self.partitioned.invalidate()
-
-    def _newton_correction(self, fresh: bool, rtol: float) -> str | None:
-        """dx_vec = J^-1 b to relative tolerance rtol, with a fresh Jacobian and factorisation if `fresh`; None, or
-        the message of a failed solve (e.g. MUMPS out of workspace: the Jacobian is then invalidated)."""
-        if fresh:
-            self._assemble_jacobian()
-            self.ksp.setOperators(self.A)
-            self.linear_solver.operator_changed()
-        t0 = _time.perf_counter()
-        self.linear_solver.solve(self.b, self.dx_vec, rtol)
-        reason = self.ksp.getConvergedReason()
-        if reason < 0:
-            detail = self.linear_solver.failure_detail()
-            self.invalidate_jacobian()
-            return f"linear solve failed (PETSc KSP reason {reason}){detail}"
-        if self.end_conditions:
-            if fresh:
-                self.end_conditions.factorised(lambda rhs, out: self.linear_solver.solve(rhs, out, rtol))
-            self.end_conditions.correct(self.dx_vec)
-        self.timings["factorise" if fresh else "solve"] += _time.perf_counter() - t0
-        self.counters["factorisations" if fresh else "reused_solves"] += 1
-        return None
-
-    @property
-    def field_increments(self) -> dict:
-        """{field: (||dx_f||_inf, ||x_f||_inf)} of the last Newton update (partitioned: of the last sweep)."""
-        return (self.partitioned or self.nonlinear_solver).field_increments
-
-    def newton(self):
-        """Solve R(x) = 0 for the current step (newton.Newton, or the partitioned sweeps of coupling_scheme
-        "partitioned"). Returns (iterations, history of residual norms)."""
-        self._reaction_ready = False
-        fem_petsc.set_bc(self.x.vector, self.bcs)
-        self.x.x.scatter_forward()
-        self._guess = self.x.x.array.copy() if self.linearly_implicit is not None else None
-        if self.partitioned is not None:
-            return self.partitioned.solve()
-        solve = lambda: self.nonlinear_solver.solve(self._assemble_residual, self._jacobian_current,  # noqa: E731
-                                                    self._newton_correction)
-        if self.linearly_implicit is not None and self._rate():
-            try:
-                with self.linearly_implicit.posed():
-                    return self.linearly_implicit.solve()
-            except NewtonDivergence as err:
-                # the fallback: Newton on the full residual, from the state before the failed solve
-                self.linearly_implicit.fallbacks += 1
-                log.info("linearly implicit step failed (%s); solved by Newton", err)
-                self.invalidate_jacobian()
-                self.x.x.array[:] = self._guess
-                self.x.x.scatter_forward()
-        return solve()
-
-    # ---------------------------------------------------------------------------------------
-    def set_bdf(self, dt):
-        """Variable-step BDF2 coefficients (Backward Euler when there is no previous step)."""
-        if self.dt_prev is None:
-            c = (1.0, -1.0, 0.0)
-        else:
-            w = dt / self.dt_prev
-            c = ((1.0 + 2.0 * w) / (1.0 + w), -(1.0 + w), w * w / (1.0 + w))
-        for const, val in zip(self.bdf, c):
-            const.value = val
-        self.dt.value = dt
-        self._sync_history()
-
-    def _sync_history(self) -> None:
-        """history = b1 x_n + b2 x_nm1 (ghosts included), after each change of the BDF coefficients or x_n, x_nm1."""
-        b1, b2 = float(self.bdf[1].value), float(self.bdf[2].value)
-        np.multiply(b1, self.x_n.x.array, out=self.history.x.array)
-        self.history.x.array[:] += b2 * self.x_nm1.x.array
-
     def step(self, dt):
         """Advance from self.time by dt. On failure the state is restored and NewtonDivergence raised."""
         self.set_bdf(dt)
@@ -450,58 +331,6 @@ class MonolithicFSI(MeshMotionMethods):
         collect_garbage(self.comm)      # the step's temporary PETSc objects (fsi.release)
         return its, history
 
-    def time_derivative(self, dofs=slice(None)) -> np.ndarray:
-        """The BDF time derivative (b0 x + b1 x_n + b2 x_nm1) / dt of the current state at the local `dofs`."""
-        b0, b1, b2 = (float(c.value) for c in self.bdf)
-        return (b0 * self.x.x.array[dofs] + b1 * self.x_n.x.array[dofs] + b2 * self.x_nm1.x.array[dofs]) \
-            / float(self.dt.value)
-
-    def _predict(self, guess: str, dt: float):
-        """Newton's initial guess for the step to t_n + dt, into x."""
-        self.x.x.array[:] = self.x_n.x.array
-        if guess == "quadratic" and self.dt_prev and self.dt_prev2:
-            # the parabola through (t_n-2, x_n-2), (t_n-1, x_n-1), (t_n, x_n) at t_n + dt: an O(dt^3) guess
-            h1, h2 = self.dt_prev, self.dt_prev + self.dt_prev2      # t_n - t_n-1, t_n - t_n-2
-            l1 = -dt * (dt + h2) / (h1 * (h2 - h1))
-            l2 = dt * (dt + h1) / (h2 * (h2 - h1))
-            self.x.x.array[:] += l1 * (self.x_nm1.x.array - self.x_n.x.array) + l2 * (self._x_nm2 - self.x_n.x.array)
-        elif guess != "constant" and self.dt_prev:
-            # x_n + (dt/dt_prev)(x_n - x_n-1): first-order extrapolation, an O(dt^2) guess instead of O(dt)
-            self.x.x.array[:] += (dt / self.dt_prev) * (self.x_n.x.array - self.x_nm1.x.array)
-
-    def pose_newton_system(self, dt):
-        """The Newton system (A, b) of a step of dt from the current time at the current iterate, as
-        `newton` assembles it (boundary values at the step's end, segregated mesh motion solved)."""
-        self.set_bdf(dt)
-        self.t.value = self.time + dt
-        self.constraints.update(self.time + dt)
-        if self.segregated:
-            self.solve_mesh_motion()
-        fem_petsc.set_bc(self.x.vector, self.bcs)
-        self.x.x.scatter_forward()
-        self._assemble_residual()
-        self._assemble_jacobian()
-        return self.A, self.b
-
-    def state(self) -> dict:
-        """What a restart needs: copies of the process-local arrays x, x_n, x_nm1 and x_nm2 (the BDF
-        history of the last accepted step), the times time, dt_prev, dt_prev2 and the lumped end conditions'
-        pressures (end_conditions)."""
-        return {"x": self.x.x.array.copy(), "x_n": self.x_n.x.array.copy(), "x_nm1": self.x_nm1.x.array.copy(),
-                "x_nm2": self._x_nm2.copy(), "time": self.time, "dt_prev": self.dt_prev, "dt_prev2": self.dt_prev2,
-                "end_conditions": self.end_conditions.state()}
-
-    def set_state(self, state: dict) -> None:
-        """Restore a `state()` (arrays of this problem's size): the arrays, the times and the load time t."""
-        for key, array in (("x", self.x.x.array), ("x_n", self.x_n.x.array), ("x_nm1", self.x_nm1.x.array),
-                           ("x_nm2", self._x_nm2)):
-            array[:] = state[key]
-        self._sync_history()
-        self.time, self.dt_prev, self.dt_prev2 = state["time"], state["dt_prev"], state["dt_prev2"]
-        if "end_conditions" in state:
-            self.end_conditions.set_state(state["end_conditions"])
-        self.t.value = self.time
-        self._reaction_ready = False    # the kept residual is not of the restored state
 
     def solve_steady(self, t=None):
         """Steady state (d/dt switched off) at time t: e.g. fluid at rest under the reference pressure,
