@@ -415,7 +415,7 @@ def test_the_residual_test_is_made_on_the_mixing():
 def test_a_residual_within_the_absolute_tolerance_does_not_make_a_factor_stale():
     """A block whose update left round-off (on the 50 mm ureter ~5e-14 -> ~4e-14) is not stale, whatever the ratio;
     above newton_atol the contraction decides."""
-    from ureterfsi.fsi.partitioned import stale_factor
+    from ureterfsi.fsi.sweep_policy import stale_factor
 
     o = SolverOptions(newton_atol=1e-10, block_reuse_contraction=0.5)
     assert not stale_factor(4.1e-14, 5.3e-14, o)
@@ -428,7 +428,7 @@ def test_the_refresh_schedule_buys_the_wall_lu_once_the_extra_sweeps_cost_as_muc
     """Rent or buy (block_refresh_sweeps): the sweeps beyond a fresh step's are summed; at the limit the wall's LU is
     due, the urine's with it only when no step since the wall's refresh came down to the floor; 0 switches it off.
     The sequences are the 50 mm ureter's (docs/performance.md)."""
-    from ureterfsi.fsi.partitioned import RefreshSchedule
+    from ureterfsi.fsi.sweep_policy import RefreshSchedule
 
     s = RefreshSchedule(limit=4)
     assert [s.converged(n) for n in (2, 2, 3, 3)] == [(), (), (), ()]
@@ -447,7 +447,7 @@ def test_the_refresh_schedule_buys_the_wall_lu_once_the_extra_sweeps_cost_as_muc
 def test_lus_due_on_schedule_are_refreshed_at_the_next_step_and_keep_the_solution(reference_8_steps, monkeypatch):
     """The tube's sweeps do not grow with its LUs' age (its coupling sets them), so the schedule is forced: with both
     LUs due after every step each step refactorises both once, and the solution is the same."""
-    from ureterfsi.fsi.partitioned import RefreshSchedule
+    from ureterfsi.fsi.sweep_policy import RefreshSchedule
 
     plain, _ = tube_run(coupling_scheme="partitioned", newton_field_rtol=1e-6, steps=8, **TOL)
     monkeypatch.setattr(RefreshSchedule, "converged", lambda self, sweeps: ("solid", "flow"))

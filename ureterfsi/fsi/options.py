@@ -84,7 +84,7 @@ class SolverOptions:
     block_reuse_contraction: float = 0.5
     # partitioned: the wall's LU is refreshed at a step's start once the steps since its last refresh have needed
     # this many sweeps, summed, beyond a step with fresh LUs (a stale LU's cost in sweeps outweighs a refresh's: rent
-    # or buy; the urine's LU too when it is the stale one, fsi.partitioned.RefreshSchedule); 0: contraction tests only
+    # or buy; the urine's LU too when it is the stale one, fsi.sweep_policy.RefreshSchedule); 0: contraction tests only
     block_refresh_sweeps: int = 4
     # partitioned: the solid block's LU, "condensed" (the velocity eliminated through the kinematic rows, exact:
     # fsi.condensation) or "whole" (the block as it stands)
