@@ -1,4 +1,5 @@
-"""Error norms and observed orders of convergence of the verification problems (SI units)."""
+"""Error norms and observed orders of convergence of the verification problems, and the integrals and counts
+they are made of (SI units)."""
 from __future__ import annotations
 
 import math
@@ -34,3 +35,15 @@ def l2_error(uh, exact, weight=1.0, degree=8, mesh=None):
     err = integrate(ufl.inner(diff, diff), mesh, weight, degree)
     ref = integrate(ufl.inner(exact, exact), mesh, weight, degree)
     return math.sqrt(max(err, 0.0)), math.sqrt(max(ref, 0.0))
+
+
+def dofs_count(problem):
+    """The global number of unknowns of a problem's mixed space."""
+    return problem.W.dofmap.index_map.size_global * problem.W.dofmap.index_map_bs
+
+
+def mean_facet_value(problem, expr, tag):
+    """(int_tag expr dS) / (int_tag dS) over reference facets (no axisymmetric weight)."""
+    mesh = problem.mesh
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=problem.scene.facet_tags, metadata={"quadrature_degree": 8})
+    return integrate(expr, mesh, dx=ds(tag)) / integrate(fem.Constant(mesh, 1.0), mesh, dx=ds(tag))
