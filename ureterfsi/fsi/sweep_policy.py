@@ -58,7 +58,8 @@ class RefreshSchedule:
 
 class SweepPolicyMethods:
     """PartitionedCoupling's mixing and stopping of the sweeps (mixed into PartitionedCoupling: they use its problem
-    `pb`, the differences `kept`, the contraction estimate `contraction` and the last sweep's `field_increments`)."""
+    `pb`, its field scales `_scales()`, the differences `kept`, the contraction estimate `contraction` and the last
+    sweep's `field_increments`)."""
 
     def _weights(self) -> np.ndarray:
         """Per owned dof 1 / max(||x_f||_inf, newton_increment_floor / newton_field_rtol) of its field, at the current
