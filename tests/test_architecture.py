@@ -1,5 +1,6 @@
-"""Architecture: no code touches another package's underscore names, and ureterfsi has no import circle (nor
-a function-level one) and loads from any of its entry modules.
+"""Architecture: no code touches another package's underscore names, ureterfsi has no import circle (nor
+a function-level one) and loads from any of its entry modules, its sub-packages keep their boundaries, and no module
+of it is longer than MAX_LINES (unless LONG_MODULES says why it must be).
 
 The private-name scan (AST, no import): an attribute access `x._name` on anything but `self`/`cls`, or a
 `from m import _name`, is a violation when `_name` is one of ureterfsi's own underscore names (a method,
@@ -220,8 +221,9 @@ def test_ureterfsi_has_no_import_cycle():
 
 # modules whose imports reach back into their own packages at import time (config validates design points
 # and names stability cases; designs and stability read config): each must load first in a fresh interpreter
-FIRST = ("ureterfsi.config", "ureterfsi.config.checks", "ureterfsi.config.validation", "ureterfsi.designs.space",
-         "ureterfsi.designs.expand", "ureterfsi.stability", "ureterfsi.stability.cases", "ureterfsi.stability.naming")
+FIRST = ("ureterfsi.config", "ureterfsi.config.checks", "ureterfsi.config.study_checks", "ureterfsi.config.validation",
+         "ureterfsi.designs.space", "ureterfsi.designs.expand", "ureterfsi.stability", "ureterfsi.stability.cases",
+         "ureterfsi.stability.naming")
 
 
 @pytest.mark.parametrize("module", FIRST)
@@ -372,3 +374,32 @@ def test_no_text_names_a_stop_number():
             continue
         found += [f"{f}:{i}" for i, line in enumerate(text.splitlines(), 1) if stop.search(line)]
     assert not found, '"stop NN" in:\n' + "\n".join(found)
+
+
+# ---------------------------------------------------------------------------------------------- module length
+MAX_LINES = 450
+# modules allowed above MAX_LINES: {path: why it must be one module}; each entry must still be needed
+LONG_MODULES: dict[str, str] = {}
+
+
+def long_modules(sources: dict, limit: int = MAX_LINES, exempt: dict = LONG_MODULES) -> list[str]:
+    """'path: N lines' for every module of {path: source} longer than `limit` lines and not in `exempt`."""
+    lengths = {path: len(src.splitlines()) for path, src in sorted(sources.items())}
+    return [f"{path}: {n} lines" for path, n in lengths.items() if n > limit and path not in exempt]
+
+
+def test_the_length_check_finds_a_long_module():
+    sources = {"ureterfsi/fsi/core.py": "x = 1\n" * 451, "ureterfsi/fsi/short.py": "x = 1\n" * 450,
+               "ureterfsi/data/table.py": "x = 1\n" * 600}
+    assert long_modules(sources, exempt={}) == ["ureterfsi/data/table.py: 600 lines",
+                                                "ureterfsi/fsi/core.py: 451 lines"]
+    assert long_modules(sources, exempt={"ureterfsi/data/table.py": "a table"}) == ["ureterfsi/fsi/core.py: 451 lines"]
+
+
+def test_no_module_is_longer_than_the_limit():
+    sources = _sources("ureterfsi")
+    found = long_modules(sources)
+    assert not found, f"modules above {MAX_LINES} lines (split them by concern, or justify in LONG_MODULES):\n" \
+        + "\n".join(found)
+    stale = [p for p in LONG_MODULES if p not in sources or len(sources[p].splitlines()) <= MAX_LINES]
+    assert not stale, f"LONG_MODULES lists modules within {MAX_LINES} lines or gone: {stale}"
