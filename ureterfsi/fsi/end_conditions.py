@@ -15,7 +15,8 @@ drains it is the solution, the configured one the start). The face pressure is e
 at every residual (implicit coupling). Newton's Jacobian gains the rank-k term sum_i (dp_i/dQ_i) s_i a_i c_i^T, a_i = int n da . phi,
 c_i = d/dx int (v - w) . n da, applied by the Woodbury identity on the kept factorisation of the 3D Jacobian A:
     dx = y - Z (I + D C^T Z)^-1 D C^T y,  y = A^-1 b,  Z = A^-1 [a_1 .. a_k],  D = diag(s_i dp_i/dQ_i),
-one extra back-substitution per boundary and factorisation, so the exact Jacobian and Newton's quadratic
+one extra back-substitution per boundary and factorisation (Z and C^T Z are kept with it; D, the conditions'
+slopes, is the current iterate's at every iteration), so the exact Jacobian and Newton's quadratic
 convergence at the cost of a few vector assemblies (Vignon-Clementel et al. 2006 couple 0D outlets implicitly).
 """
 from __future__ import annotations
@@ -127,8 +128,11 @@ class EndConditions:
         self.p_n, self.p_nm1 = self.p.copy(), self.p.copy()
         self.q = np.zeros(k)                 # whole-model flux Q of the current iterate
         self.slope = np.zeros(k)             # s dp/dQ at the current iterate
-        self._Z = self._C = None      # A^-1 a_i and c_i of the kept factorisation
-        self._D = self._M = None      # diag(s_i dp_i/dQ_i) there, I + D C^T Z
+        # the kept factorisation's a_i, Z_i = A^-1 a_i and c_i, and C^T Z (None: no factorisation yet)
+        self._a = [fem_petsc.create_vector(f) for f in self.a_forms]
+        self._Z = [a.duplicate() for a in self._a]
+        self._C = [fem_petsc.create_vector(f) for f in self.c_forms]
+        self._CZ = None
 
     def __bool__(self):
         return bool(self.boundaries)
@@ -167,27 +171,24 @@ class EndConditions:
         return vec
 
     def factorised(self, solve) -> None:
-        """After a fresh factorisation: Z = A^-1 a_i by `solve(rhs, out)`, c_i and D at the current iterate."""
-        if not self.slope.any():
-            self._Z = None
+        """After a fresh factorisation: c_i at the current iterate, Z_i = A^-1 a_i by `solve(rhs, out)` and C^T Z.
+        They do not depend on the conditions' slopes: D is the current iterate's at every correction."""
+        if not self.coupled:
             return
         bcs = self.pb.bcs
-        if self._C is None:
-            self._C = [fem_petsc.create_vector(f) for f in self.c_forms]
-            self._a = [fem_petsc.create_vector(f) for f in self.a_forms]
-            self._Zs = [a.duplicate() for a in self._a]
         for c, f in zip(self._C, self.c_forms):
             self._assemble(c, f, bcs)
-        for a, z, f in zip(self._a, self._Zs, self.a_forms):
+        for a, z, f in zip(self._a, self._Z, self.a_forms):
             solve(self._assemble(a, f, bcs), z)
-        self._Z, self._D = self._Zs, np.diag(self.slope[self.coupled])
-        self._M = np.eye(len(self._Z)) + self._D @ np.array([[c.dot(z) for z in self._Z] for c in self._C])
+        self._CZ = np.array([[c.dot(z) for z in self._Z] for c in self._C])
 
     def correct(self, dx: PETSc.Vec) -> None:
-        """dx <- dx - Z (I + D C^T Z)^-1 D C^T dx (Woodbury; dx = A^-1 b on entry)."""
-        if self._Z is None:
+        """dx <- dx - Z (I + D C^T Z)^-1 D C^T dx (Woodbury; dx = A^-1 b on entry), D = diag(s_i dp_i/dQ_i) of the
+        current iterate (update()), so the rank-k term is the current Jacobian's also on a kept factorisation."""
+        if self._CZ is None:
             return
-        coef = np.linalg.solve(self._M, self._D @ np.array([c.dot(dx) for c in self._C]))
+        D = np.diag(self.slope[self.coupled])
+        coef = np.linalg.solve(np.eye(len(self._Z)) + D @ self._CZ, D @ np.array([c.dot(dx) for c in self._C]))
         for z, g in zip(self._Z, coef):
             dx.axpy(-g, z)
 
