@@ -17,6 +17,8 @@ VARIABLES = {
     "mean_pressure_drop": ("Pa", "time mean over the run of the inlet minus outlet area-mean end-face pressure"),
     "outlet_mean_axial_velocity": ("m s-1", "mean axial (z) velocity over the outlet face (paper §3.2 measure)"),
     "fluid_volume": ("m3", "volume of the urine domain"),
+    "fluid_volume_rate": ("m3 s-1", "rate of change of the urine domain's volume the continuity rows balance, "
+                                    "int J tr(Grad w F^-1) dX (w the BDF mesh velocity): inlet_flux - outlet_flux"),
     "max_wall_displacement": ("m", "maximum over the wall probe line of |radial displacement| of the ureter outer wall "
                                    "(reference outer surface R_o(z), narrowed by a stricture, meridian y = 0)"),
     "stent_max_von_mises": ("Pa", "maximum von Mises stress over the stent volume"),

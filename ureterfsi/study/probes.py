@@ -164,7 +164,7 @@ class UreterProbes(Observer):
 
     def series_names(self):
         names = ["time", "outlet_flux", "inlet_flux", "outlet_mean_pressure", "inlet_mean_pressure",
-                 "outlet_mean_axial_velocity", "fluid_volume", "max_wall_displacement"]
+                 "outlet_mean_axial_velocity", "fluid_volume", "fluid_volume_rate", "max_wall_displacement"]
         if self.has_stent:
             names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
                       "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux",
@@ -187,6 +187,7 @@ class UreterProbes(Observer):
             s[f"{end}_mean_pressure"].append(val[f"{end}_pressure_integral"] / val[f"{end}_area"])
         s["outlet_mean_axial_velocity"].append(val["outlet_axial_velocity_integral"] / val["outlet_area"])
         s["fluid_volume"].append(self.fraction * val["fluid_volume"])
+        s["fluid_volume_rate"].append(self.fraction * val["fluid_volume_rate"])
         wall = self.wall.radial_displacement(pb.time)
         s["max_wall_displacement"].append(float(np.nanmax(np.abs(wall))))
         if self.has_stent:
