@@ -253,3 +253,15 @@ def test_mass_balance_with_a_moving_wall():
           f"dt = 0.01, 0.005, 0.0025: {' '.join(f'{e:.2e}' for e in gcl)}, orders {' '.join(f'{o:.2f}' for o in orders)}")
     assert closure < 1e-9 and flux_closure < 1e-9
     assert all(o > 1.7 for o in orders)
+
+
+def test_reflux_at_round_off_is_zero():
+    """A part's backflow below REFLUX_FLOOR x the face's flux scale (sum of the parts' |Q|) carries no reflux: a
+    state at rest (fluxes ~1e-21 m^3/s of either sign) before the wave adds 0 (it added ~1e-23 m^3 before the
+    floor); a backflow above the floor is integrated by the trapezoidal rule."""
+    from ureterfsi.study.end_probes import REFLUX_FLOOR, RefluxVolumes
+    reflux = RefluxVolumes(2)
+    assert reflux.add(0.0, [-1e-21, 3e-21]) == [0.0, 0.0]
+    assert reflux.add(0.02, [1e-6, -2e-16]) == [0.0, 0.0]          # 2e-16 < 1e-9 x 1e-6
+    assert reflux.add(0.04, [-5e-7, 1e-6]) == [pytest.approx(0.5 * 0.02 * 5e-7, rel=1e-15), 0.0]
+    assert 2e-16 < REFLUX_FLOOR * reflux.scale < 5e-7

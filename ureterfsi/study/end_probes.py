@@ -2,7 +2,10 @@
 stress f0 the kidney and bladder end faces see) and the reflux, the volume of urine that has moved toward the kidney
 through the kidney end face since t = 0, inside the stent lumen and in the annulus around it (the whole lumen
 without a stent): V(t) = int_0^t max(-Q_in(s), 0) ds per part, Q_in the part's inflow (trapezoidal rule over
-the steps). Fluxes and volumes are the whole ureter's (the modelled fraction's times its symmetry factor)."""
+the steps). Fluxes and volumes are the whole ureter's (the modelled fraction's times its symmetry factor). A part's
+backflow counts only above REFLUX_FLOOR times the face's flux scale (the largest |Q_lumen| + |Q_annulus| so far,
+the step's included): a flux at round-off (a state at rest: ~1e-20 m^3/s against the ~1e-6 m^3/s the wave drives)
+carries no reflux."""
 from __future__ import annotations
 
 import numpy as np
@@ -17,6 +20,39 @@ from ureterfsi.mesh import tags
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, UreterGeometry
 
 NAMES = ("pelvic_pressure", "bladder_pressure", "stent_lumen_reflux_volume", "annulus_reflux_volume")
+# a backflow below this fraction of the face's flux scale is round-off: far above the assembly's (1e-14 of the
+# scale at rest) and below what the Newton tolerances resolve (relative 1e-8 of the state)
+REFLUX_FLOOR = 1.0e-9
+
+
+class RefluxVolumes:
+    """V_j(t) = int_0^t max(-Q_j, 0) dt per part j of a face (trapezoidal over the records), the backflows below
+    REFLUX_FLOOR times the face's flux scale (max over the records so far of sum_j |Q_j|) taken as 0."""
+
+    def __init__(self, parts: int):
+        self.volumes = [0.0] * parts
+        self.scale = 0.0
+        self.last = None          # (time, inflows Q_j) of the last record
+
+    def backflow(self, q: float) -> float:
+        return -q if -q > REFLUX_FLOOR * self.scale else 0.0
+
+    def add(self, t: float, inflows) -> list:
+        """Record the parts' inflows Q_j at time t; the volumes up to t."""
+        self.scale = max(self.scale, sum(abs(q) for q in inflows))
+        if self.last is not None:
+            t0, q0 = self.last
+            self.volumes = [v + 0.5 * (t - t0) * (self.backflow(a) + self.backflow(b))
+                            for v, a, b in zip(self.volumes, q0, inflows)]
+        self.last = (t, list(inflows))
+        return list(self.volumes)
+
+    def state(self) -> dict:
+        return {"volumes": self.volumes, "scale": self.scale, "last": self.last}
+
+    def load_state(self, state: dict) -> None:
+        self.volumes, self.scale = list(state["volumes"]), state["scale"]
+        self.last = None if state["last"] is None else (state["last"][0], list(state["last"][1]))
 
 
 class EndProbes(Observer):
@@ -35,7 +71,7 @@ class EndProbes(Observer):
         self.forms = [fem.form(inside * inflow * pb.ds(inlet)), fem.form((1.0 - inside) * inflow * pb.ds(inlet))]
         self.faces = [self._boundary(inlet), self._boundary(outlet)]
         self.series = {name: [] for name in NAMES}
-        self._last = None          # (time, reflux rates) of the last record
+        self.reflux = RefluxVolumes(len(self.forms))
 
     def _boundary(self, tag):
         return next(ob for ob in self.pb.scene.open_boundaries if tag in ob.tags)
@@ -45,22 +81,16 @@ class EndProbes(Observer):
         for name, ob in zip(NAMES[:2], self.faces):
             f0 = pb.end_conditions.normal_stress(ob)
             s[name].append(float(getattr(f0, "value", f0)))
-        rates = [max(-self.fraction * assemble_scalar(f, pb.comm), 0.0) for f in self.forms]
-        volumes = [0.0, 0.0]
-        if self._last is not None and s["stent_lumen_reflux_volume"]:
-            t0, r0 = self._last
-            volumes = [s[n][-1] + 0.5 * (pb.time - t0) * (a + b)
-                       for n, a, b in zip(NAMES[2:], r0, rates)]
+        volumes = self.reflux.add(pb.time, [self.fraction * assemble_scalar(f, pb.comm) for f in self.forms])
         for name, v in zip(NAMES[2:], volumes):
             s[name].append(v)
-        self._last = (pb.time, rates)
 
     def state(self) -> dict:
-        return {"series": self.series, "last": self._last}
+        return {"series": self.series, "reflux": self.reflux.state()}
 
     def load_state(self, state: dict) -> None:
         self.series = state["series"]
-        self._last = None if state["last"] is None else (state["last"][0], list(state["last"][1]))
+        self.reflux.load_state(state["reflux"])
 
     def variables(self) -> dict:
         """{name: CF-annotated DataArray over `time`}."""
