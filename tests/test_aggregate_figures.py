@@ -66,6 +66,7 @@ class _SyntheticProbes:
                        "inlet_flux": list(FLUX_AMPLITUDE * np.cos(t)),
                        "outlet_mean_axial_velocity": list(1e-3 * np.sin(2 * np.pi * t / 3) * (1 + 0.05 * k)),
                        "fluid_volume": list(np.full_like(t, 3e-6)),
+                       "fluid_volume_rate": list(FLUX_AMPLITUDE * (np.cos(t) - np.sin(t) * (1 + 0.05 * k))),
                        "outlet_mean_pressure": list(130.0 + 5.0 * np.sin(t)),
                        "inlet_mean_pressure": list(130.0 + 5.0 * np.cos(t)),
                        "max_wall_displacement": list(1e-3 * np.ones_like(t))}

@@ -102,6 +102,34 @@ class Valve:
         return self.downstream(t) + dp, slope
 
 
+class FaceFlux:
+    """The flux int (v - w) . n da leaving the 3D domain through the faces `tags` (modelled, unscaled), in the parts
+    of the scene's flux_split indicator chi (int chi ..., the rest; one part without it), from the UFL integrand
+    `flux` = (v - w) . J F^-T N weight with w the BDF mesh velocity of the current iterate. `recorded`: the parts
+    at the last accepted state (EndConditions.accept, hold), for observers: after a step the forms' history has
+    moved on to the next step's."""
+
+    def __init__(self, pb, tags, flux, split=None):
+        ds = pb.ds(tuple(tags))
+        self.pb, self.total_form = pb, fem.form(flux * ds)
+        self.part_form = None if split is None else fem.form(split * flux * ds)
+        self.recorded = self.parts()
+
+    def total(self) -> float:
+        return self.pb.comm.allreduce(fem.assemble_scalar(self.total_form))
+
+    def parts(self) -> list:
+        """[chi part, the rest] (with a split), or [total], at the current iterate (collective)."""
+        total = self.total()
+        if self.part_form is None:
+            return [total]
+        part = self.pb.comm.allreduce(fem.assemble_scalar(self.part_form))
+        return [part, total - part]
+
+    def record(self) -> None:
+        self.recorded = self.parts()
+
+
 class EndConditions:
     """The open boundaries of `problem` with a `condition`: their face pressure constants (the residual's f0),
     flux forms, the Jacobian's Woodbury update and the compartments' pressure history (p_n, p_n-1)."""
@@ -111,17 +139,18 @@ class EndConditions:
         ops = pb.ops
         F = physics.deformation_gradient(ops, u)
         n_da = ufl.det(F) * ufl.inv(F).T * ops.normal()
+        self._flux = ufl.dot(ops.vec(v) - ops.vec(w), n_da) * ops.weight
         self.boundaries = [ob for ob in pb.scene.open_boundaries if ob.condition is not None]
         self.pressure = {}
-        self.flux_forms, self.a_forms, self.c_forms = [], [], []
+        self._faces = {}              # FaceFlux by tags: the conditions' and the observers' (face_flux)
+        self.a_forms, self.c_forms = [], []
         for ob in self.boundaries:
             ds = pb.ds(tuple(ob.tags))
             self.pressure[id(ob)] = fem.Constant(pb.mesh, float(ob.condition.start()))
-            flux = ufl.dot(ops.vec(v) - ops.vec(w), n_da) * ops.weight * ds
-            self.flux_forms.append(fem.form(flux))
+            self.face_flux(ob.tags)
             if not isinstance(ob.condition, Waveform):      # a waveform's pressure does not depend on the state
                 self.a_forms.append(fem.form(ufl.dot(n_da, ops.vec(phi)) * ops.weight * ds))
-                self.c_forms.append(fem.form(ufl.derivative(flux, pb.x)))
+                self.c_forms.append(fem.form(ufl.derivative(self._flux * ds, pb.x)))
         self.coupled = [i for i, ob in enumerate(self.boundaries) if not isinstance(ob.condition, Waveform)]
         k = len(self.boundaries)
         self.p = np.array([float(self.pressure[id(ob)].value) for ob in self.boundaries])   # current iterate
@@ -146,11 +175,18 @@ class EndConditions:
         b0, b1, b2 = (float(c.value) for c in pb.bdf)
         return b0, b1, b2, float(pb.dt.value), self.p_n[i], self.p_nm1[i]
 
+    def face_flux(self, tags) -> FaceFlux:
+        """The FaceFlux of the faces `tags` (split by the scene's flux_split): one set of forms per face for the
+        conditions and any observer of the face's flux (which reads its `recorded` parts after each accepted step;
+        register it before the first step)."""
+        key = tuple(tags)
+        if key not in self._faces:
+            self._faces[key] = FaceFlux(self.pb, key, self._flux, self.pb.scene.flux_split)
+        return self._faces[key]
+
     def fluxes(self) -> np.ndarray:
         """Whole-model flux Q_i = s_i int (v - w) . n da of each boundary at the current state (collective)."""
-        comm = self.pb.comm
-        return np.array([ob.flux_scale * comm.allreduce(fem.assemble_scalar(f))
-                         for ob, f in zip(self.boundaries, self.flux_forms)])
+        return np.array([ob.flux_scale * self._faces[tuple(ob.tags)].total() for ob in self.boundaries])
 
     def update(self) -> None:
         """Face pressures of the current iterate (called before each residual assembly)."""
@@ -193,18 +229,23 @@ class EndConditions:
             dx.axpy(-g, z)
 
     def accept(self) -> None:
-        """Shift the compartments' history after an accepted step."""
+        """After an accepted step (before the problem's history moves on): shift the compartments' history and
+        record the faces' fluxes."""
         self.p_nm1[:] = self.p_n
         self.p_n[:] = self.p
+        for face in self._faces.values():
+            face.record()
 
     @property
     def compartments(self) -> bool:
         return any(isinstance(ob.condition, Compartment) for ob in self.boundaries)
 
     def hold(self) -> None:
-        """A steady state: the history is the current pressure."""
+        """A steady state: the history is the current pressure; the faces' fluxes recorded."""
         self.p_nm1[:] = self.p
         self.p_n[:] = self.p
+        for face in self._faces.values():
+            face.record()
 
     def state(self) -> dict:
         return {"p": self.p.tolist(), "p_n": self.p_n.tolist(), "p_nm1": self.p_nm1.tolist()}

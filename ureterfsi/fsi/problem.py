@@ -321,11 +321,11 @@ class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
                 self.t.value = self.time
                 raise
         self.x_dot.x.array[:] = self.time_derivative()
+        self.end_conditions.accept()            # before the history moves on (its face fluxes' w is the step's)
         self._x_nm2[:] = self.x_nm1.x.array     # the step's own history, for assemble_reaction
         self.x_nm1.x.array[:] = self.x_n.x.array
         self.x_n.x.array[:] = self.x.x.array
         self._sync_history()
-        self.end_conditions.accept()
         self.dt_prev2, self.dt_prev, self.time = self.dt_prev, dt, t_new
         self._reaction_ready = True     # Newton's last residual was assembled at the accepted state
         collect_garbage(self.comm)      # the step's temporary PETSc objects (fsi.release)

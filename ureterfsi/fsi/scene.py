@@ -97,6 +97,9 @@ class Scene:
     # engine extends the boundary displacement by solving SolverOptions.mesh_motion. Where the displacement
     # DirichletConditions apply, their values win (the engine measures the disagreement).
     mesh_motion: Optional[Callable] = None
+    # A UFL indicator on the open faces (1 in one part of a face, 0 in the other; e.g. a stent's lumen and the annulus
+    # around it): fsi.end_conditions.FaceFlux assembles a face's flux in these two parts. None: one part
+    flux_split: Optional[object] = None
 
     def __post_init__(self):
         if self.fluid is None and not self.solids:

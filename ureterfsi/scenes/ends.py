@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from ureterfsi.config.end_pressures import bladder_pressure
 from ureterfsi.mesh import tags
-from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
+from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, UreterGeometry
 
 from ..fsi import Compartment, OpenBoundary, Valve, Waveform
+from ..fsi.probes import inside_radius
 
 
 def junction_is_valve(ends: dict, has_stent: bool) -> bool:
@@ -57,6 +58,15 @@ def end_boundaries(cfg: dict, has_stent: bool, symmetry: str) -> list:
     else:
         bladder = OpenBoundary([tags.OUTLET], p_ref, beta, condition=Waveform(bladder_pressure(ends, p_ref)))
     return [kidney, bladder]
+
+
+def lumen_indicator(cfg: dict, mesh, has_stent: bool, axisymmetric: bool):
+    """The scene's flux_split: the stent lumen on the end faces, inside the stent's mid-wall radius (as the probes'
+    lumen fluxes, ureterfsi.study.probes); None without a stent or in r-z (no lumen apart from the annulus there)."""
+    if not has_stent or axisymmetric:
+        return None
+    g = UreterGeometry.from_config(cfg)
+    return inside_radius(mesh, g.probe_radius, g.stent_offset)
 
 
 def symmetry_of(facet_tags_present: set, axisymmetric: bool) -> str:

@@ -16,7 +16,7 @@ from ureterfsi.mesh import tags
 
 from ..fsi import (DirichletCondition, FluidRegion, LinearElastic, MooneyRivlin, NewtonianFluid,
                    Scene, SolidRegion, SurfaceLoad)
-from .ends import end_boundaries, symmetry_of
+from .ends import end_boundaries, lumen_indicator, symmetry_of
 
 FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 
@@ -105,6 +105,7 @@ def ureter_scene(cfg: dict, mesh, cell_tags, facet_tags, axisymmetric: bool = Fa
         dirichlet=dirichlet,
         axisymmetric=axisymmetric,
         name="ureter",
+        flux_split=lumen_indicator(cfg, mesh, has_stent, axisymmetric),
     )
 
 
@@ -131,4 +132,5 @@ def ureter_fluid_scene(cfg: dict, mesh, cell_tags, facet_tags, wall_displacement
     return Scene(mesh, cell_tags, facet_tags, fluid=FluidRegion([tags.FLUID], urine),
                  open_boundaries=end_boundaries(cfg, tags.FLUID_STENT in facet_present,
                                                 symmetry_of(facet_present, axisymmetric)),
-                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine", mesh_motion=mesh_motion)
+                 dirichlet=dirichlet, axisymmetric=axisymmetric, name="ureter-urine", mesh_motion=mesh_motion,
+                 flux_split=lumen_indicator(cfg, mesh, tags.FLUID_STENT in facet_present, axisymmetric))

@@ -9,15 +9,12 @@ carries no reflux."""
 from __future__ import annotations
 
 import numpy as np
-import ufl
 import xarray as xr
-from dolfinx import fem
 
 from ureterfsi.data.cf import cf_meta
-from ureterfsi.fsi import Observer, physics
-from ureterfsi.fsi.probes import assemble_scalar, inside_radius
+from ureterfsi.fsi import Observer
 from ureterfsi.mesh import tags
-from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, UreterGeometry
+from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
 
 NAMES = ("pelvic_pressure", "bladder_pressure", "stent_lumen_reflux_volume", "annulus_reflux_volume")
 # a backflow below this fraction of the face's flux scale is round-off: far above the assembly's (1e-14 of the
@@ -57,21 +54,16 @@ class RefluxVolumes:
 
 class EndProbes(Observer):
     """Records NAMES after every accepted step of the problem `pb`: kidney face `inlet`, bladder face `outlet`,
-    `fraction` the modelled fraction's symmetry factor (1 / mesh.geometry.SYMMETRY_FRACTION), `lumen` the UFL
-    indicator of the stent lumen on the faces (None: no stent)."""
+    `fraction` the modelled fraction's symmetry factor (1 / mesh.geometry.SYMMETRY_FRACTION). The kidney face's
+    flux is the engine's (fsi.end_conditions.FaceFlux, the one its conditions use), in the parts of the scene's
+    flux_split (the stent lumen; none: all of it the annulus's)."""
 
-    def __init__(self, pb, inlet: int, outlet: int, fraction: float, lumen=None):
+    def __init__(self, pb, inlet: int, outlet: int, fraction: float):
         self.pb, self.fraction = pb, fraction
-        ops = pb.ops
-        X, Xdot = pb.split(), pb.split(pb.x_dot)
-        F = physics.deformation_gradient(ops, X["displacement"])
-        n_da = ufl.det(F) * ufl.inv(F).T * ops.normal()
-        inflow = -ufl.dot(ops.vec(X["velocity"]) - ops.vec(Xdot["displacement"]), n_da) * ops.weight
-        inside = 0.0 if lumen is None else lumen
-        self.forms = [fem.form(inside * inflow * pb.ds(inlet)), fem.form((1.0 - inside) * inflow * pb.ds(inlet))]
+        self.inlet = pb.end_conditions.face_flux([inlet])
         self.faces = [self._boundary(inlet), self._boundary(outlet)]
         self.series = {name: [] for name in NAMES}
-        self.reflux = RefluxVolumes(len(self.forms))
+        self.reflux = RefluxVolumes(2)
 
     def _boundary(self, tag):
         return next(ob for ob in self.pb.scene.open_boundaries if tag in ob.tags)
@@ -81,7 +73,9 @@ class EndProbes(Observer):
         for name, ob in zip(NAMES[:2], self.faces):
             f0 = pb.end_conditions.normal_stress(ob)
             s[name].append(float(getattr(f0, "value", f0)))
-        volumes = self.reflux.add(pb.time, [self.fraction * assemble_scalar(f, pb.comm) for f in self.forms])
+        parts = self.inlet.recorded
+        lumen, annulus = parts if len(parts) == 2 else (0.0, parts[0])
+        volumes = self.reflux.add(pb.time, [-self.fraction * lumen, -self.fraction * annulus])
         for name, v in zip(NAMES[2:], volumes):
             s[name].append(v)
 
@@ -102,10 +96,7 @@ class EndProbes(Observer):
         return out
 
 
-def ends_probes(pb, cfg: dict, symmetry: str) -> EndProbes:
-    """EndProbes of a ureter run: faces INLET (kidney) and OUTLET (bladder), the stent lumen inside the stent's
-    mid-wall radius (as the probes' lumen fluxes, ureterfsi.study.probes)."""
-    g = UreterGeometry.from_config(cfg)
-    has_stent = pb.comm.allreduce(pb.scene.facet_tags.find(tags.FLUID_STENT).size) > 0
-    lumen = inside_radius(pb.mesh, g.probe_radius, g.stent_offset) if has_stent and not pb.scene.axisymmetric else None
-    return EndProbes(pb, tags.INLET, tags.OUTLET, 1.0 / SYMMETRY_FRACTION[symmetry], lumen)
+def ends_probes(pb, symmetry: str) -> EndProbes:
+    """EndProbes of a ureter run: faces INLET (kidney) and OUTLET (bladder), the lumen the scene's flux_split
+    (scenes.ends.lumen_indicator)."""
+    return EndProbes(pb, tags.INLET, tags.OUTLET, 1.0 / SYMMETRY_FRACTION[symmetry])

@@ -87,7 +87,7 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None, fi
     log.info("%s model %s, mesh %s (%s): %d cells%s, %d dofs, %d processes, setup %.1f s", fidelity, spec.model,
              spec.level, spec.symmetry, ncells, posed.description, ndofs, comm.size, _time.perf_counter() - wall0)
     fields = field_writer(cfg, out_path, posed.parts, settings.end, comm)
-    ends = ends_probes(pb, cfg, spec.symmetry)
+    ends = ends_probes(pb, spec.symmetry)
     integrator = integrate_from_rest(pb, settings, [obs, ends] + posed.observers + ([fields] if fields else []),
                                      cfg["fluid"]["reference_pressure"])
     records = integrator.records
