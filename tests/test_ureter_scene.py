@@ -82,6 +82,9 @@ def test_urine_moves_and_volume_balances(mini):
     # measured: 3.0% of the peak rate at dt = 20 ms. The defect is the discrete geometric conservation
     # error of BDF on the moving mesh, O(dt^2): tests/test_conservation.py shows 1.1e-4 at dt = 5 ms.
     assert np.max(np.abs(np.asarray(dvdt) - net)) < 0.05 * np.max(np.abs(net)), (dvdt, net)
+    # the volume rate the continuity rows balance (docs/end-conditions.md): Q_in - Q_out to the solver's tolerance
+    rate = ds["fluid_volume_rate"].values
+    assert np.max(np.abs(q_in - q_out - rate)) < 1e-9 * np.max(np.abs(net)), (q_in - q_out, rate)
 
 
 def test_stent_probes_and_diagnostics(mini):
