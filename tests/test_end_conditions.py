@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from dolfinx import fem
 from scipy.optimize import brentq
 
 from ureterfsi.config.end_pressures import bladder_pressure
@@ -69,7 +70,7 @@ def test_mass_balance_production_outflow_storage():
     production = 2.0e-9
     valve = OpenBoundary([OUTLET], backflow=0.0, condition=Valve(lambda t: 0.0, R, 1e3 * R, 1.0))
     pb = pelvis_problem(production, valve)
-    forms = {k: __import__("dolfinx").fem.form(f) for k, f in flux_volume_forms(pb, INLET, OUTLET).items()}
+    forms = {k: fem.form(f) for k, f in flux_volume_forms(pb, INLET, OUTLET).items()}
     p_hist = [pb.end_conditions.p[0]] * 2
     worst, volume0 = 0.0, assemble_scalar(forms["fluid_volume"], pb.comm)
     for _ in range(6):
@@ -111,7 +112,8 @@ def test_voiding_reflux_volume_against_poiseuille():
     lumen, annulus = probes.series["stent_lumen_reflux_volume"][-1], probes.series["annulus_reflux_volume"][-1]
     got = lumen + annulus
     print(f"\n[voiding reflux, rigid pipe] {got:.6e} m^3 vs Poiseuille {exact:.6e} m^3: {got / exact - 1:+.2e}; "
-          f"r < a/2 share {lumen / got:.6f} vs 7/16; bladder pressure peak {max(probes.series['bladder_pressure']):.1f} Pa")
+          f"r < a/2 share {lumen / got:.6f} vs 7/16; "
+          f"bladder pressure peak {max(probes.series['bladder_pressure']):.1f} Pa")
     assert got == pytest.approx(exact, rel=2e-3)
     assert lumen / got == pytest.approx(7.0 / 16.0, rel=1e-6)
     # the kidney face's flux is the engine's one (its FaceFlux), the lumen part the scene's flux_split
@@ -153,7 +155,8 @@ def test_kept_factorisation_takes_the_valves_current_slope():
     pb = MonolithicFSI(scene, replace(TIGHT, reuse_jacobian=True))
     its, history = pb.solve_steady()
     rel = [r / history[0] for r in history]
-    rates = [math.log(rel[k + 1]) / math.log(rel[k]) for k in range(len(rel) - 1) if rel[k] < 0.2 and rel[k + 1] > 1e-12]
+    rates = [math.log(rel[k + 1]) / math.log(rel[k]) for k in range(len(rel) - 1)
+             if rel[k] < 0.2 and rel[k + 1] > 1e-12]
     print(f"\n[valve switch, kept LU] {its} iterations, {dict(pb.counters)}, residuals "
           f"{' '.join(f'{r:.1e}' for r in history)}")
     assert pb.counters["factorisations"] == 1 and its <= 5
@@ -222,7 +225,7 @@ def moving_wall_pelvis_run(dt, end=0.04):
             OpenBoundary([T_OUT], REFERENCE_STRESS)]
     pb = MonolithicFSI(replace(case.scene, open_boundaries=ends), TIGHT)
     pb.solve_steady()
-    forms = {k: __import__("dolfinx").fem.form(f) for k, f in flux_volume_forms(pb, T_IN, T_OUT).items()}
+    forms = {k: fem.form(f) for k, f in flux_volume_forms(pb, T_IN, T_OUT).items()}
     p, vol, rows = [pb.end_conditions.p[0]] * 2, [assemble_scalar(forms["fluid_volume"], pb.comm)] * 2, []
     while pb.time < end - 1e-12:
         pb.step(dt)
@@ -260,10 +263,11 @@ def test_mass_balance_with_a_moving_wall():
     orders = [math.log(gcl[i] / gcl[i + 1]) / math.log(2.0) for i in range(len(gcl) - 1)]
     print(f"\n[moving wall + pelvis] max |production - storage - Q_out - S| / max|S| = {closure:.1e}; "
           f"|Q_in - Q_out - S| = {flux_closure:.1e}\n  |V - V0 - BDF integral of S| at 0.04 s / (max|S| 0.04 s), "
-          f"dt = 0.01, 0.005, 0.0025: {' '.join(f'{e:.2e}' for e in gcl)}, orders {' '.join(f'{o:.2f}' for o in orders)}")
+          f"dt = 0.01, 0.005, 0.0025: {' '.join(f'{e:.2e}' for e in gcl)}, "
+          f"orders {' '.join(f'{o:.2f}' for o in orders)}")
     assert closure < 1e-9 and flux_closure < 1e-9
     assert all(o > 1.7 for o in orders)
-    # the engine's recorded face flux (the reflux probes') is the study probes' inlet flux (the mesh is held on the face)
+    # the engine's recorded face flux (the reflux probes') is the study probes' inlet flux (the mesh held on it)
     assert max(np.abs(r[:, 4]).max() for r in runs.values()) < 1e-12 * scale
 
 
