@@ -194,14 +194,13 @@ def test_partitioned_scheme_refuses_lumped_conditions():
 
 
 @pytest.mark.parametrize("change, key, text", [
-    ({"bladder": {"condition": "voiding"}}, "ends", "the one-way rung's wall ignores the urine pressure"),
     ({"bladder": {"junction_backward_resistance": 1.0e+7}}, "ends.bladder.junction_backward_resistance",
      "resists backflow more"),
     ({"kidney": {"urine_production": 1.0e-3}}, "ends.kidney.urine_production", "0.5-2 mL/min"),
 ])
 def test_end_conditions_refused_in_one_line(change, key, text):
-    """Voiding pressures on a one-way study (its wall ignores the urine pressure), a valve resisting forward flow
-    more than backflow, an implausible urine production: one line naming the key."""
+    """A valve resisting forward flow more than backflow, an implausible urine production: one line naming the
+    key. (Voiding on a one-way study is posed: its wall takes the urine pressure, tests/test_one_way_wall_pressure.py.)"""
     from ureterfsi.config import ConfigError, deep_merge, load_config
     cfg = load_config()
     cfg["ends"] = deep_merge(cfg["ends"], change)

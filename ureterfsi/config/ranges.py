@@ -52,7 +52,7 @@ RANGES: dict[str, Range] = {
     "ends.bladder.cough_*": Range(0.0, 3600.0, "s", "a cough lasts tenths of a second"),
     "ends.bladder.junction_*_resistance": Range(1e3, 1e16, "Pa s/m^3", "1 mm-wide channels are ~1e7-1e8 Pa s/m^3"),
     "ends.bladder.junction_smoothing_pressure": Range(1e-3, 100.0, "Pa", "well below a cmH2O (98 Pa)"),
-    "ends.one_way_max_pressure_fraction": Range(0.0, 1.0, "1", "a fraction of the peristaltic load"),
+    "ends.one_way_pressure_tolerance": Range(0.0, 1.0, "1", "a fraction of the peristaltic load"),
     "ureter.c10": _MOONEY_RIVLIN,
     "ureter.c01": _MOONEY_RIVLIN,
     "ureter.c20": _MOONEY_RIVLIN,

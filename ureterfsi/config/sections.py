@@ -2,6 +2,7 @@
 other values is refused. The one list of them: rule mesh, rule solve (and design_solve), the one-way rung's wall."""
 from __future__ import annotations
 
+from .end_pressures import wall_pressure_posed
 from .schema import schema_defaults
 
 # the geometry the r-z wall solve reads (ureterfsi.scenes.wall_rz.WallModel): the stent and its holes do not enter
@@ -32,7 +33,9 @@ def mesh_sections(cfg: dict, model: str, level: str, symmetry: str) -> dict:
 
 def wall_sections(cfg: dict) -> dict:
     """The configuration the one-way rung's r-z wall solve reads (ureterfsi.study.oneway.wall_history): a change
-    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused."""
+    re-runs the shared wall-motion job, and a wall-motion file made from other values is refused. The end conditions
+    enter where an end is not open (the urine pressure the wall then takes, config.end_pressures.wall_pressure)."""
+    ends = {"ends": {k: cfg["ends"][k] for k in ("kidney", "bladder")}} if wall_pressure_posed(cfg) else {}
     return {"geometry": {k: cfg["geometry"][k] for k in WALL_GEOMETRY}} | {
         k: cfg[k] for k in ("ureter", "peristalsis", "time")} | {
-        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}}
+        "solver": {k: cfg["solver"][k] for k in ("predictor", "max_step_halvings")}} | ends

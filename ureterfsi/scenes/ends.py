@@ -16,12 +16,23 @@ without a stent and open with one (a stent holds the junction open).
 """
 from __future__ import annotations
 
-from ureterfsi.config.end_pressures import bladder_pressure
+import ufl
+
+from ureterfsi.config.end_pressures import Arithmetic, bladder_pressure, wall_pressure, wall_pressure_posed
 from ureterfsi.mesh import tags
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, UreterGeometry
 
 from ..fsi import Compartment, OpenBoundary, Valve, Waveform
 from ..fsi.probes import inside_radius
+
+
+UFL = Arithmetic(ufl.cos, ufl.sin, ufl.min_value, ufl.max_value, lambda x: ufl.conditional(ufl.gt(x, 0.0), 1.0, 0.0))
+
+
+def wall_urine_pressure(cfg: dict):
+    """The urine pressure above p_ref the one-way rung's r-z wall takes on its inner surface, p(z, t) of UFL
+    expressions (config.end_pressures.wall_pressure), or None with both ends open (the paper's one-way wall)."""
+    return wall_pressure(cfg, UFL) if wall_pressure_posed(cfg) else None
 
 
 def junction_is_valve(ends: dict, has_stent: bool) -> bool:

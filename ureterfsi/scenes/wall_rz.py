@@ -2,8 +2,8 @@
 (ureterfsi.study.calibration, paper §2.4.2) and of the wall step of the one-way rung (ureterfsi.study.oneway).
 
 Rectangle [R_i, R_o] x [0, L] (an axisymmetric stricture moves both surfaces inward by R_i f b(z)),
-Mooney-Rivlin mixed u-pi, the Gaussian peristaltic dead traction (eq. 21) on the outer surface, the inner
-surface traction-free (the urine pressure is left out), the end faces fixed (eq. 20) or sliding. Tags: the
+Mooney-Rivlin mixed u-pi, the Gaussian peristaltic dead traction (eq. 21) on the outer surface, on the inner
+surface a given urine pressure (a follower pressure) or none, the end faces fixed (eq. 20) or sliding. Tags: the
 ureter wall's own (tags.URETER; facets FLUID_URETER inner, URETER_OUTER outer, URETER_ENDS ends).
 """
 from __future__ import annotations
@@ -18,8 +18,8 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from ureterfsi.mesh import tags
-from ..fsi import (DirichletCondition, MonolithicFSI, MooneyRivlin, NewtonDivergence, Scene, SolidRegion,
-                   SolverOptions, SurfaceLoad)
+from ..fsi import (DirichletCondition, FollowerPressure, MonolithicFSI, MooneyRivlin, NewtonDivergence, Scene,
+                   SolidRegion, SolverOptions, SurfaceLoad)
 from ..fsi.tagging import tag_cells, tag_facets
 from ureterfsi.mesh.geometry import Stricture
 from .ureter import peristaltic_traction, pulse_sigma
@@ -50,10 +50,12 @@ class WallModel:
     load: "pulse" (the Gaussian of cfg["peristalsis"]: frozen at a centre for static solves, travelling
     as `ureter.peristaltic_traction` in transient runs) or "uniform" (the peak traction everywhere).
     ends: "fixed" (u = v = 0 at z = 0, L, paper eq. 20) or "sliding" (u_z = v_z = 0 only).
+    urine_pressure: p(z, t) (Pa, UFL in the reference z and the time) on the inner surface, following its
+    deformation (the one-way rung's assumed urine pressure, scenes.ends.wall_urine_pressure), or None.
     """
 
     def __init__(self, cfg, nr=4, nz=None, length=None, load="pulse", travelling=False, ends="fixed",
-                 options=None):
+                 options=None, urine_pressure=None):
         if load not in ("pulse", "uniform") or ends not in ("fixed", "sliding"):
             raise ValueError(f"load 'pulse'|'uniform', ends 'fixed'|'sliding'; got {load!r}, {ends!r}")
         self.cfg = cfg
@@ -104,6 +106,8 @@ class WallModel:
                          DirichletCondition("velocity", [tags.URETER_ENDS], components=[1])]
         self.scene = Scene(mesh=mesh, cell_tags=ct, facet_tags=ft, solids=[SolidRegion([tags.URETER], mat)],
                            loads=[SurfaceLoad([tags.URETER_OUTER], traction)], dirichlet=dirichlet, axisymmetric=True,
+                           pressure_loads=[] if urine_pressure is None else [
+                               FollowerPressure([tags.FLUID_URETER], lambda X, t: urine_pressure(X[1], t))],
                            name=f"ureter-wall-rz-{load}-{ends}")
         self.options = options or SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25)
         t0 = _time.perf_counter()

@@ -9,11 +9,11 @@ import xarray as xr
 from dolfinx import fem
 from mpi4py import MPI
 
-from ureterfsi.config import ConfigError, one_way_unposable
-from ureterfsi.config.end_pressures import max_end_pressure, one_way_refusal
+from ureterfsi.config import one_way_unposable
+from ureterfsi.config.end_pressures import wall_pressure, wall_pressure_posed
 from ureterfsi.mesh import tags
 from ureterfsi.study.fields import oneway_parts
-from ureterfsi.fsi import Observer, TimeSettings
+from ureterfsi.fsi import Observer, SolveFailure, TimeSettings
 from ureterfsi.fsi.problem import MonolithicFSI
 from ureterfsi.fsi.submesh import extract
 from ureterfsi.mesh.geometry import StentModel, UreterGeometry
@@ -44,11 +44,8 @@ def write_wall_motion(cfg: dict, out_path: str) -> xr.Dataset:
 def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings, mesh, cell_tags,
          facet_tags) -> pipeline.Posed:
     """The rung on the run's mesh: the wall motion (read from `wall_path`, or solved), the urine alone on the
-    fluid submesh, the quasi-static stent on the stent submesh, the probes and the one-way diagnostics. End pressures
-    the wall would ignore are refused (config.end_pressures.one_way_refusal)."""
-    why = one_way_refusal(cfg)
-    if why:
-        raise ConfigError("ends", why)
+    fluid submesh, the quasi-static stent on the stent submesh, the probes and the one-way diagnostics (which refuse
+    the run where the urine's pressure on the wall leaves the one the wall assumed: WallPressureRefused)."""
     if wall_path:
         history = WallHistory.from_dataset(open_netcdf(wall_path, WALL_MOTION), cfg, settings.end, settings.dt)
         log.info("wall (r-z) motion read from %s (%d steps, solved in %.1f s)", wall_path, len(history.time) - 1,
@@ -69,7 +66,7 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
                                  spec.symmetry != "full", g.stent_probe_points(z))
     obs = UreterProbes(pb, cfg, model, spec.symmetry, cfg["time"]["probe_times"], wall=RecordedWall(history, z),
                        stent=stent)
-    diag = OneWayDiagnostics(pb, cfg["fluid"]["reference_pressure"], stent)
+    diag = OneWayDiagnostics(pb, cfg, stent)
 
     def attrs() -> dict:
         extra = {
@@ -85,8 +82,12 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
             "one_way_mesh_motion_boundary_mismatch": pb.mesh_motion_mismatch,
             "one_way_max_wall_pressure_deviation": diag.max_wall_pressure_deviation,
             "one_way_peristaltic_peak_traction": cfg["peristalsis"]["peak_traction"],
-            # the end pressure above p_ref the wall leaves out (accepted below ends.one_way_max_pressure_fraction)
-            "one_way_ignored_end_pressure": max_end_pressure(cfg)[0],
+            # the urine pressure the wall assumed against the one the urine solve found (OneWayDiagnostics)
+            "one_way_wall_pressure_posed": int(wall_pressure_posed(cfg)),
+            "one_way_wall_pressure_mismatch": diag.mismatch[0],
+            "one_way_wall_pressure_mismatch_time": diag.mismatch[1],
+            "one_way_wall_pressure_mismatch_z": diag.mismatch[2],
+            "one_way_wall_pressure_tolerance": diag.limit,
         }
         if stent is not None:
             extra.update(one_way_max_stent_displacement=diag.max_stent_displacement,
@@ -95,7 +96,8 @@ def pose(cfg: dict, spec: RunSpec, wall_path: str | None, settings: TimeSettings
 
     def summary() -> str:
         return (f" (max |p - p_ref| on the wall {diag.max_wall_pressure_deviation:.1f} Pa vs load "
-                f"{cfg['peristalsis']['peak_traction']:.0f} Pa"
+                f"{cfg['peristalsis']['peak_traction']:.0f} Pa; the wall's assumed urine pressure off the urine's by "
+                f"{diag.mismatch[0]:.1f} Pa"
                 + (f"; max stent displacement {diag.max_stent_displacement:.2e} m vs hole {2 * g.hole_radius:.1e} m"
                    if stent is not None else "") + ")")
 
@@ -119,29 +121,64 @@ def run(cfg: dict, spec: RunSpec, out_path: str, checkpoint_path: str | None = N
     return pipeline.run(cfg, spec, out_path, checkpoint_path, "one_way", partial(pose, cfg, spec, wall_path), wall_path)
 
 
+class WallPressureRefused(SolveFailure):
+    """The urine's mean pressure on the wall left the pressure the one-way wall assumed by more than
+    ends.one_way_pressure_tolerance x peristalsis.peak_traction (end conditions posed): the run stops there."""
+
+
 class OneWayDiagnostics(Observer):
     """What the one-way rung leaves out, measured as it runs: the largest |p - p_ref| of the urine on the
-    ureter wall (a load the wall solve does not see) and the largest stent displacement (a motion the
-    urine does not see). Registered after UreterProbes, which updates the stent."""
+    ureter wall, the largest stent displacement (a motion the urine does not see), and the largest difference
+    between the urine's mean pressure on the wall per z-slab (one wall thickness long: the wall averages a load
+    over about its thickness; the mean of the pressure nodes in the slab) and the pressure the wall assumed there,
+    p_ref + config.end_pressures.wall_pressure (`mismatch`: Pa, its time, its slab's centre z). With an end
+    condition posed the run is refused (WallPressureRefused) once that difference exceeds
+    ends.one_way_pressure_tolerance x peristalsis.peak_traction (`limit`, Pa); with both ends open (the paper's
+    one-way wall, p_ref alone assumed) it is recorded only. Registered after UreterProbes, which updates the
+    stent."""
 
-    def __init__(self, pb: MonolithicFSI, reference_pressure: float, stent: QuasiStaticStent | None):
+    def __init__(self, pb: MonolithicFSI, cfg: dict, stent: QuasiStaticStent | None):
         P, pmap = pb.sub("pressure").collapse()
         fdim = pb.mesh.topology.dim - 1
-        self.dofs = np.asarray(pmap)[fem.locate_dofs_topological(
-            P, fdim, pb.scene.facet_tags.find(tags.FLUID_URETER))]
-        self.pb, self.p_ref, self.stent = pb, reference_pressure, stent
+        local = fem.locate_dofs_topological(P, fdim, pb.scene.facet_tags.find(tags.FLUID_URETER))
+        self.dofs = np.asarray(pmap)[local]
+        z = P.tabulate_dof_coordinates()[local, 1 if pb.scene.axisymmetric else 2]
+        g = cfg["geometry"]
+        n = max(1, int(round(g["length"] / g["ureter_wall_thickness"])))
+        self.slab = np.minimum((z / g["length"] * n).astype(int), n - 1)
+        self.counts = np.bincount(self.slab, minlength=n)
+        self.z_slab = (np.arange(n) + 0.5) * g["length"] / n
+        self.assumed = wall_pressure(cfg)
+        self.posed = wall_pressure_posed(cfg)
+        self.limit = cfg["ends"]["one_way_pressure_tolerance"] * cfg["peristalsis"]["peak_traction"]
+        self.pb, self.p_ref, self.stent = pb, cfg["fluid"]["reference_pressure"], stent
         self.max_wall_pressure_deviation, self.max_stent_displacement = 0.0, 0.0
+        self.mismatch = (0.0, 0.0, 0.0)
 
     def observe(self, problem, step):
         if self.dofs.size:
-            dev = float(np.max(np.abs(self.pb.x.x.array[self.dofs] - self.p_ref)))
+            p = self.pb.x.x.array[self.dofs]
+            dev = float(np.max(np.abs(p - self.p_ref)))
             self.max_wall_pressure_deviation = max(self.max_wall_pressure_deviation, dev)
+            filled = self.counts > 0
+            mean = np.bincount(self.slab, weights=p, minlength=self.counts.size)[filled] / self.counts[filled]
+            z = self.z_slab[filled]
+            diff = np.abs(mean - self.p_ref - np.array([self.assumed(zk, problem.time) for zk in z]))
+            k = int(np.argmax(diff))
+            if diff[k] > self.mismatch[0]:
+                self.mismatch = (float(diff[k]), float(problem.time), float(z[k]))
+            if self.posed and diff[k] > self.limit:
+                raise WallPressureRefused(
+                    f"ends.one_way_pressure_tolerance: at t = {problem.time:g} s the urine's mean pressure on the wall "
+                    f"at z = {z[k]:.4g} m differs from the one the one-way wall assumed by {diff[k]:.4g} Pa > "
+                    f"{self.limit:.4g} Pa (the tolerance x peristalsis.peak_traction); use fidelity fully_coupled")
         if self.stent is not None:
             u = self.stent.u.x.array.reshape(-1, 3)
             self.max_stent_displacement = max(self.max_stent_displacement, float(np.linalg.norm(u, axis=1).max()))
 
     def state(self):
-        return {"p": self.max_wall_pressure_deviation, "u": self.max_stent_displacement}
+        return {"p": self.max_wall_pressure_deviation, "u": self.max_stent_displacement, "mismatch": self.mismatch}
 
     def load_state(self, state):
         self.max_wall_pressure_deviation, self.max_stent_displacement = state["p"], state["u"]
+        self.mismatch = tuple(state["mismatch"])

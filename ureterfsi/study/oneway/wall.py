@@ -15,6 +15,7 @@ from ureterfsi.data.checked import BadFile, Contract
 from ureterfsi.config import wall_sections
 from ureterfsi.data.cf import WALL_MOTION_VARIABLES, attach
 from ureterfsi.data.provenance import config_hash, provenance_attrs
+from ureterfsi.scenes.ends import wall_urine_pressure
 from ureterfsi.scenes.wall_rz import WallModel
 
 log = logging.getLogger("ureterfsi.study.oneway")
@@ -144,12 +145,17 @@ class _SurfaceRecorder(Observer):
 
 
 def wall_history(cfg: dict, end: float, dt: float, nr: int = 4) -> WallHistory:
-    """Transient r-z wall-alone solve over [0, end] with step dt (from rest, load ramped)."""
+    """Transient r-z wall-alone solve over [0, end] with step dt (from rest, load ramped), under the urine pressure the
+    configured ends give (scenes.ends.wall_urine_pressure; from its steady state at t = 0, as the fully coupled
+    run's)."""
     t0 = _time.perf_counter()
-    model = WallModel(cfg, nr=nr, travelling=True,
+    urine = wall_urine_pressure(cfg)
+    model = WallModel(cfg, nr=nr, travelling=True, urine_pressure=urine,
                       options=SolverOptions(newton_rtol=1e-10, newton_atol=1e-12, newton_max_iterations=25,
                                             reuse_jacobian=True, reuse_contraction=0.3,
                                             predictor=cfg["solver"]["predictor"]))
+    if urine is not None:
+        model.problem.solve_steady(0.0)
     rec = _SurfaceRecorder(model)
     TimeIntegrator(model.problem, TimeSettings(end=end, dt=dt, output_times=cfg["time"]["probe_times"],
                                                max_halvings=cfg["solver"]["max_step_halvings"]),
