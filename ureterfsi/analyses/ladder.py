@@ -144,7 +144,8 @@ def ladder_dataset(paths: dict, cfg: dict, runs: dict | None = None) -> xr.Datas
     ds.attrs.update(provenance_attrs(cfg, model=lad["model"], reference=lad["reference"], window_s=lad["end"]))
     for r in names:
         ds.attrs[f"run_{r}_source"] = Path(paths[r]).name
-        for key in ("one_way_max_wall_pressure_deviation", "one_way_max_stent_displacement"):
+        for key in ("one_way_max_wall_pressure_deviation", "one_way_wall_pressure_mismatch",
+                    "one_way_max_stent_displacement"):
             if key in runs[r].attrs:
                 ds.attrs[f"run_{r}_{key}"] = float(runs[r].attrs[key])
     ds.attrs["Conventions"] = "CF-1.8"
