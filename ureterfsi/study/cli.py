@@ -31,7 +31,8 @@ def configure_logging(stream=None) -> None:
         lg.propagate = False
 
 
-def main(argv=None) -> int:
+def parser() -> argparse.ArgumentParser:
+    """The arguments of `python -m ureterfsi.study` (ureterfsi.workflow.launch builds them for the rules)."""
     ap = argparse.ArgumentParser(prog="python -m ureterfsi.study",
                                  description="FSI solve of one stent model on one mesh (fully coupled or one-way).")
     ap.add_argument("--config", nargs="+", default=["config/config.yaml"], help="config file and overlays")
@@ -60,7 +61,11 @@ def main(argv=None) -> int:
     ap.add_argument("--name", default=None, help="what a failure names (e.g. 'design point S/P')")
     ap.add_argument("--record-failure", action="store_true",
                     help="a failed solve writes its run file holding the failure (attribute solve_failed) and exits 0")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
     configure_logging()
     try:
         if args.run_config:

@@ -64,5 +64,6 @@ def command(job: SolveJob, resources, python: str = sys.executable) -> str:
     return f"{run} -m {STUDY} " + " ".join(shlex.quote(a) for a in args)
 
 
-# the shell directive of every solve rule: the command (params.solve, command) and its output into the rule's log
-SHELL = "{params.solve} > {log} 2>&1"
+# the shell directive of every solve rule: the command (params.solve, command), its output into the rule's log;
+# a failed solve's last line (its one-line error) also to stderr, where Snakemake's error report shows it
+SHELL = '{params.solve} > {log} 2>&1 || (echo "rule {rule}: $(tail -n 1 {log})" >&2; exit 1)'

@@ -6,6 +6,8 @@
 import os
 import pwd
 
+from ureterfsi.workflow.cluster import capped
+
 # the SLURM plugin reads USER to guess an account; batch environments and CI containers may not set it
 os.environ.setdefault("USER", pwd.getpwuid(os.getuid()).pw_name)
 

@@ -7,18 +7,14 @@ import json
 import sys
 
 from snakemake.exceptions import WorkflowError
-from snakemake.resources import Resource
 
 from ureterfsi.designs import expand as ureter_designs
-from ureterfsi.designs import jobs as design_jobs
 from ureterfsi.config import (
     ConfigError,
     deep_merge,
-    one_way_unposable,
     read_config_args,
     read_yaml,
     run_sections,
-    unmakeable,
     validate_config,
     wall_sections,
 )
@@ -174,23 +170,3 @@ def solve_command(job):
     return lambda w, input, output, resources: launch.command(
         job(w, input, output), resources
     )
-
-
-# Cluster runs (cluster.smk).
-
-
-def capped(resource, limit):
-    """`resource` (a rule's value, callable or profile expression) evaluated, then at most `limit`."""
-
-    def value(wildcards, input, attempt, threads, rulename, async_run):
-        v = resource.evaluate(
-            wildcards,
-            input=input,
-            attempt=attempt,
-            threads=threads,
-            rulename=rulename,
-            async_run=async_run,
-        ).value
-        return min(v, limit) if isinstance(v, int) else v
-
-    return Resource(resource.name, value)

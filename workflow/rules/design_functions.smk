@@ -1,5 +1,6 @@
 # Input functions, params and resources of the design stage (designs.smk), thin wrappers of
 # ureterfsi.designs.jobs; included after common.smk.
+from ureterfsi.designs import jobs as design_jobs
 
 
 def design_figures(study):

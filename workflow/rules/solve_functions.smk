@@ -1,6 +1,6 @@
 # Input functions, params and resources of the mesh, solve and ladder stages (mesh.smk, solve.smk,
 # ladder.smk), thin wrappers of the package; included after common.smk.
-
+from ureterfsi.config import one_way_unposable, unmakeable
 
 # mesh
 
