@@ -66,4 +66,4 @@ def command(job: SolveJob, resources, python: str = sys.executable) -> str:
 
 # the shell directive of every solve rule: the command (params.solve, command), its output into the rule's log;
 # a failed solve's last line (its one-line error) also to stderr, where Snakemake's error report shows it
-SHELL = '{params.solve} > {log} 2>&1 || (echo "rule {rule}: $(tail -n 1 {log})" >&2; exit 1)'
+SHELL = "{params.solve} > {log} 2>&1 || (tail -n 1 {log} >&2; exit 1)"
