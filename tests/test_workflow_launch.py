@@ -38,8 +38,9 @@ def test_study_solve_command():
                           paths.run("fully_coupled", "quarter", "3", "coarse"), paths.checkpoint("x"),
                           run_config=paths.run_config("3"), end=0.3)
     cmd = launch.command(job, MPI, python="py")
-    assert cmd == ("mpiexec -n 4 py -m ureterfsi.study --run-config results/configs/model3.json --model 3 --level coarse"
-                   " --symmetry quarter --fidelity fully_coupled --mesh results/meshes/quarter/model3_coarse.msh"
+    assert cmd == ("mpiexec -n 4 py -m ureterfsi.study --run-config results/configs/model3.json --model 3"
+                   " --level coarse --symmetry quarter --fidelity fully_coupled"
+                   " --mesh results/meshes/quarter/model3_coarse.msh"
                    " --out results/runs/fully_coupled/quarter/model3_coarse.nc --checkpoint results/checkpoints/x.npz"
                    " --end 0.3 --out-of-core 1")
     run, args = parsed(cmd)
@@ -142,7 +143,8 @@ def test_the_scan_finds_planted_own_solves():
     spelled = ok.replace("launch.SHELL", '"python -m ureterfsi.study --out-of-core 1 > {log}"')
     assert own_solves({"a.smk": spelled}) == ['a.smk:5: "python -m ureterfsi.study --out-of-core 1 > {log}"',
                                               "a.smk: rule solve does not run launch.SHELL with solve_command"]
-    script = '"""Runs ureterfsi.study (a mention)."""\nfrom ureterfsi.study.run import solve\nsolve(cfg, spec, "one_way", out)\n'
+    script = ('"""Runs ureterfsi.study (a mention)."""\n'
+              'from ureterfsi.study.run import solve\nsolve(cfg, spec, "one_way", out)\n')
     assert own_solves({"s.py": script}) == ["s.py:2: from ureterfsi.study.run import solve"]
     nested = "if X:\n\n    rule design_solve:\n        script:\n            'x.py'\n"
     assert own_solves({"d.smk": nested}) == ["d.smk: rule design_solve does not run launch.SHELL with solve_command"]

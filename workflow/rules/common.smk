@@ -14,6 +14,7 @@ from ureterfsi.config import (
     deep_merge,
     read_config_args,
     read_yaml,
+    unmakeable,
     run_sections,
     validate_config,
     wall_sections,
@@ -109,6 +110,19 @@ def figure_outputs(stem, category="Paper figures"):
             path = report(path, caption=f"../report/{stem}.rst", category=category)
         out.append(path)
     return out
+
+
+def refuse_unmakeable(w):
+    """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
+    on it, is refused before any job starts, in one line on stderr (an exception here would print a
+    traceback)."""
+    reason = unmakeable(config, w.model, w.level, w.symmetry)
+    if reason:
+        sys.stderr.write(
+            f"target error: {paths.mesh(w.symmetry, w.model, w.level)}: {reason}\n"
+        )
+        sys.exit(2)
+    return []
 
 
 def level_priority(w):

@@ -1,22 +1,6 @@
-# Input functions, params and resources of the mesh, solve and ladder stages (mesh.smk, solve.smk,
-# ladder.smk), thin wrappers of the package; included after common.smk.
-from ureterfsi.config import one_way_unposable, unmakeable
-
-# mesh
-
-
-def refuse_unmakeable(w):
-    """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
-    on it, is refused before any job starts, in one line on stderr (an exception here would print a
-    traceback)."""
-    reason = unmakeable(config, w.model, w.level, w.symmetry)
-    if reason:
-        sys.stderr.write(
-            f"target error: {paths.mesh(w.symmetry, w.model, w.level)}: {reason}\n"
-        )
-        sys.exit(2)
-    return []
-
+# Input functions, params and resources of the solve and ladder stages (solve.smk, ladder.smk), thin
+# wrappers of the package; included after common.smk.
+from ureterfsi.config import one_way_unposable
 
 # solve: a study run
 
