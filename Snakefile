@@ -18,6 +18,8 @@ report: "workflow/report/workflow.rst"
 
 
 include: "workflow/rules/common.smk"
+include: "workflow/rules/solve_functions.smk"
+include: "workflow/rules/design_functions.smk"
 include: "workflow/rules/mesh.smk"
 include: "workflow/rules/solve.smk"
 include: "workflow/rules/aggregate.smk"

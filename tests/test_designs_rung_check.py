@@ -339,7 +339,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
     """A fully coupled corner solve that fails (the thin-gap corner f = 0.7 inverts the harmonic mesh motion at 40
     ms) is recorded by its job as a run file holding the failure: the check names it, no error is claimed there, and
     no point is trusted."""
-    from ureterfsi.designs.results import write_failed_corner
+    from ureterfsi.study.run import write_failed_run
 
     cfg = config_with(s=grid(hole_diameter=[5e-4, 6e-4], peak_traction=[4e4, 5e4]))
     st = studies(cfg)["s"]
@@ -351,7 +351,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         _fake_run(corners[c.id][0], 1e-9, 1e-5)
         if i == 0:
-            write_failed_corner(c.config, corners[c.id][1], "fully_coupled", "(fully_coupled) failed: ALE mesh inverted")
+            write_failed_run(c.config, corners[c.id][1], "fully_coupled", "(fully_coupled) failed: ALE mesh inverted")
         else:
             _fake_run(corners[c.id][1], 1e-9, 1e-5)
     check = rung_check_dataset(cfg, "s", corners)

@@ -2,7 +2,8 @@
 
 space       the parameter catalogue, a point's values and configuration
 expand      each study's points (grid or sample) and rung-check corners, the design rules' paths and requests
+jobs        what the design rules ask of the studies: inputs, rerun triggers, each solve's rung and options
 rung_check  the one-way rung checked against the fully coupled one at chosen points
 results     the design dataset, sensitivities
 """
-__all__ = ["expand", "results", "rung_check", "space"]
+__all__ = ["expand", "jobs", "results", "rung_check", "space"]

@@ -134,7 +134,7 @@ RUNG_CHECK = Contract("rung check", attrs=("rung_check",),
 
 
 def _corner_run(path) -> xr.Dataset:
-    """A corner's run file: a run (DESIGN_RUN), or the record of a solve that failed (write_failed_corner)."""
+    """A corner's run file: a run (DESIGN_RUN), or the record of a solve that failed (ureterfsi.study.run.write_failed_run)."""
     ds = open_netcdf(path, Contract("corner run file"))
     return ds if "solve_failed" in ds.attrs else open_netcdf(path, DESIGN_RUN)
 
@@ -169,15 +169,6 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed
     text += (f"; {len(out)} of {len(st.points)} design points outside the checked region: {', '.join(out)}" if out
              else "; every design point inside the checked region")
     return text
-
-
-def write_failed_corner(cfg: dict, path, rung: str, message: str) -> None:
-    """The run file of a corner whose solve on `rung` failed: no data, the failure in its attribute solve_failed
-    (rung_check_dataset reports the corner as not checked)."""
-    from ureterfsi.data.cf import write_netcdf
-
-    ds = xr.Dataset(attrs=provenance_attrs(cfg, rung=rung, solve_failed=message))
-    write_netcdf(ds, path, title=f"ureterfsi rung-check corner: the {rung} solve failed")
 
 
 def error_scales(run) -> dict:

@@ -10,6 +10,7 @@ cases     the axes as data, the cases of a configuration and the configuration o
 limits    the limits and the StabilityLimit a case ends with
 observer  energies, volume balance and limits after every accepted step (an engine Observer; dolfinx)
 run       run_case: one case -> its dataset, the failure classified from the engine's exceptions and records
+jobs      what the stability rules ask of a case: its mesh, reservation rung and rerun trigger
 dataset   the per-case scalars (CaseScalars), the per-case file, the combined matrix, its outcome table
 """
 from .cases import AXES, AXIS, AXIS_PARAMETER, SCENES, SYMMETRY, Axis, case_by_name, case_setup, cases, settings

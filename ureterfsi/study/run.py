@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import xarray as xr
 
+from ureterfsi.data.cf import write_netcdf
+from ureterfsi.data.provenance import provenance_attrs
 from ureterfsi.study import coupled, oneway
 from ureterfsi.study.options import RunSpec
 
@@ -13,3 +15,10 @@ def solve(cfg: dict, spec: RunSpec, fidelity: str, out_path: str, checkpoint_pat
     if fidelity == "one_way":
         return oneway.run(cfg, spec, out_path, checkpoint_path, wall_path=wall_path)
     return coupled.run(cfg, spec, out_path, checkpoint_path)
+
+
+def write_failed_run(cfg: dict, path, rung: str, message: str) -> None:
+    """The run file of a solve on `rung` that failed: no data, the failure in its attribute solve_failed (a
+    rung-check corner's, which ureterfsi.designs.results.rung_check_dataset reports as not checked)."""
+    ds = xr.Dataset(attrs=provenance_attrs(cfg, rung=rung, solve_failed=message))
+    write_netcdf(ds, path, title=f"ureterfsi run: the {rung} solve failed")

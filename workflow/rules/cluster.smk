@@ -2,12 +2,15 @@
 # overlay (config/site-example.yaml). Included after every rule: each job gets the site's partition and
 # account, and its tasks, mem_mb and runtime capped at what one node (and the partition) allows, so that no
 # job waits in the queue for a node that cannot exist. Jobs that need more than a node has are refused before
-# submission (solve_job_mem_mb).
+# submission (common.smk: solve_mem_mb_of).
 import os
 import pwd
 
+from ureterfsi.workflow.cluster import capped
+
 # the SLURM plugin reads USER to guess an account; batch environments and CI containers may not set it
 os.environ.setdefault("USER", pwd.getpwuid(os.getuid()).pw_name)
+
 
 NODE_LIMITS = {
     "tasks": config["cluster"]["cpus_per_node"],

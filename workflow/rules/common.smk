@@ -1,29 +1,27 @@
-# Shared part of the workflow rules: lists derived from the config, the local memory budget, wildcard
-# constraints, and every function the rule files call (input functions, params, resources; the resource decisions
-# themselves: ureterfsi.workflow.resources, the paths: ureterfsi.workflow.paths).
+# Shared part of the workflow rules: the configuration validated, lists derived from it, the local memory
+# budget, wildcard constraints, and what every stage needs: the study's run files, figure outputs and the
+# resources and command of a solve (the decisions: ureterfsi.workflow.resources and .launch, the paths:
+# ureterfsi.workflow.paths). The stages' own input functions: solve_functions.smk, design_functions.smk (their
+# logic in the package).
 import json
 import sys
 
 from snakemake.exceptions import WorkflowError
-from snakemake.resources import Resource
 
 from ureterfsi.designs import expand as ureter_designs
 from ureterfsi.config import (
     ConfigError,
     deep_merge,
-    mesh_sections,
     read_config_args,
-    one_way_unposable,
     read_yaml,
-    run_sections,
     unmakeable,
+    run_sections,
     validate_config,
     wall_sections,
 )
-from ureterfsi.workflow import paths
+from ureterfsi.workflow import launch, paths
 from ureterfsi.workflow import resources as decide
 from ureterfsi.workflow.machine import physical_memory_mib
-from ureterfsi.stability import case_by_name, case_setup
 from ureterfsi.stability import cases as stability_cases
 
 # Validation at the edge: one clear line naming the key and the constraint, non-zero exit, no output.
@@ -114,6 +112,19 @@ def figure_outputs(stem, category="Paper figures"):
     return out
 
 
+def refuse_unmakeable(w):
+    """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
+    on it, is refused before any job starts, in one line on stderr (an exception here would print a
+    traceback)."""
+    reason = unmakeable(config, w.model, w.level, w.symmetry)
+    if reason:
+        sys.stderr.write(
+            f"target error: {paths.mesh(w.symmetry, w.model, w.level)}: {reason}\n"
+        )
+        sys.exit(2)
+    return []
+
+
 def level_priority(w):
     """Scheduling priority of a level's mesh and solve jobs (decide.level_priority: finer levels first)."""
     return decide.level_priority(config, w.level)
@@ -134,266 +145,42 @@ def memory_budget():
     return getattr(budget, "raw", budget)
 
 
-def study_rung(w):
-    """(fidelity, symmetry, level) of a study solve: its wildcards."""
-    return w.fidelity, w.symmetry, w.level
-
-
-def ladder_rung(w):
-    """(fidelity, symmetry, level) of a ladder rung (config ladder.rungs)."""
-    rung = config["ladder"]["rungs"][w.rung]
-    return rung["fidelity"], rung["symmetry"], rung["level"]
+# The resources and command of a solve rule, from rung(w): the (fidelity, symmetry, level) of its solve.
 
 
 def out_of_core(rung):
-    """Resource mumps_out_of_core of a solve whose (fidelity, symmetry, level) is rung(w): decide.out_of_core
-    against memory_budget (a local run caps its reservation at the budget, a cluster run at the node's memory).
-    A resource, not a param: it does not change the solution, so a changed budget must not re-run a finished
-    solve (params are a rerun trigger)."""
+    """Resource mumps_out_of_core: decide.out_of_core against memory_budget (a local run caps its reservation at
+    the budget, a cluster run at the node's memory). A resource, not a param: it does not change the solution,
+    so a changed budget must not re-run a finished solve (params are a rerun trigger).
+    """
     return lambda w: decide.out_of_core(config, *rung(w), memory_budget())
 
 
-def refuse_unmakeable(w):
-    """Input function (no input) of the mesh rule; a mesh the configuration cannot make, and so every run
-    on it, is refused before any job starts, in one line on stderr (an exception here would print a
-    traceback)."""
-    reason = unmakeable(config, w.model, w.level, w.symmetry)
-    if reason:
-        sys.stderr.write(
-            f"target error: {paths.mesh(w.symmetry, w.model, w.level)}: {reason}\n"
-        )
-        sys.exit(2)
-    return []
-
-
-def run_config_file(model):
-    """The configuration file of a model's solves: config.run_sections as JSON, written by rule solve_config."""
-    return paths.run_config(model)
-
-
 def solve_mpi(rung):
-    """Resource mpi of a solve whose (fidelity, symmetry, level) is rung(w) (decide.mpi_resource)."""
+    """Resource mpi (decide.mpi_resource: the local launcher of an MPI-capable solve, none for a serial one)."""
     return lambda w: decide.mpi_resource(*rung(w)[:2])
 
 
-def solve_job_mem_mb(w):
-    """Resource mem_mb of a solve (solve_mem_mb). On a cluster, a solve that needs more than a node has
-    (cluster.mem_mb_per_node) and cannot keep its factors on disk (out_of_core) is refused before submission.
+def solve_mem_mb_of(rung, run):
+    """Resource mem_mb (solve_mem_mb). On a cluster, a solve that needs more than a node has
+    (cluster.mem_mb_per_node) and cannot keep its factors on disk is refused before submission, naming run(w).
     """
-    why = decide.node_refusal(
-        config, w.fidelity, w.symmetry, w.level, config["cluster"]["mem_mb_per_node"]
-    )
-    if why:
-        raise WorkflowError(
-            f"{paths.run(w.fidelity, w.symmetry, w.model, w.level)} {why}"
+
+    def mem_mb(w):
+        why = decide.node_refusal(
+            config, *rung(w), config["cluster"]["mem_mb_per_node"]
         )
-    return solve_mem_mb(w.fidelity, w.symmetry, w.level)
+        if why:
+            raise WorkflowError(f"{run(w)} {why}")
+        return solve_mem_mb(*rung(w))
+
+    return mem_mb
 
 
-def solve_launcher(rung):
-    """Params function: the interpreter of `-m ureterfsi.study`, behind the MPI launcher for several tasks
-    (decide.launcher; a function of resources: Snakemake keeps it out of the rerun triggers).
+def solve_command(job):
+    """Params `solve` of every solve (its shell is launch.SHELL): launch.command of job(w, input, output), a
+    launch.SolveJob. A function of resources: Snakemake keeps it out of the rerun triggers.
     """
-    return lambda w, resources: decide.launcher(
-        *rung(w)[:2], resources.get("tasks", 1), resources.get("mpi"), sys.executable
+    return lambda w, input, output, resources: launch.command(
+        job(w, input, output), resources
     )
-
-
-def solve_inputs(w):
-    """The mesh and the configuration file, and for the one-way rung the shared wall motion."""
-    inputs = {
-        "mesh": paths.mesh(w.symmetry, w.model, w.level),
-        "config": run_config_file(w.model),
-    }
-    if w.fidelity == "one_way":
-        if one_way_unposable(config):  # refused before any job starts, in one line
-            sys.stderr.write(
-                f"target error: {paths.run('one_way', w.symmetry, w.model, w.level)}: "
-                f"{one_way_unposable(config)}\n"
-            )
-            sys.exit(2)
-        inputs["wall"] = paths.WALL_MOTION
-    return inputs
-
-
-def solve_wall(wildcards, input):
-    """--wall of a one-way solve (the shared wall motion); nothing for the fully coupled rung."""
-    return f"--wall {input.wall}" if "wall" in input.keys() else ""
-
-
-def convergence_only_end(w):
-    """Runs that only the mesh-convergence study needs (its model on a level other than study.level) stop at
-    study.convergence_time: Fig. 3 and the GCI look no further (the scene models only what it needs).
-    """
-    if w.level != STUDY_LEVEL and w.model == CONVERGENCE_MODEL:
-        return f"--end {config['study']['convergence_time']}"
-    return ""
-
-
-def stability_mesh(w):
-    """The r-z mesh of the case's level (case_setup names a level missing from mesh.levels); none for a
-    hole_elements case, whose mesh sizes are its own (built in the case)."""
-    s = case_setup(config, case_by_name(config, w.case))
-    if s["scene"] == "holes":
-        return []
-    return paths.mesh("axisymmetric", s["model"], s["level"])
-
-
-def stability_memory(w):
-    """MiB a case reserves: that of a study solve of its scene (solve_mem_mb): r-z fully coupled, or 3D one-way
-    at the case's level and symmetry."""
-    s = case_setup(config, case_by_name(config, w.case))
-    if s["scene"] == "holes":
-        return solve_mem_mb("one_way", s["symmetry"], s["level"])
-    return solve_mem_mb("fully_coupled", "axisymmetric", s["level"])
-
-
-def stability_inputs(w):
-    """The configuration entering one case (a change re-runs that case; plotting options do not)."""
-    case = case_by_name(config, w.case)
-    keys = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "solver")
-    st = {k: v for k, v in config["stability"].items() if k != "axes"}
-    s = case_setup(config, case)
-    mesh = {"mesh": s["cfg"]["mesh"]} if s["scene"] == "holes" else {}
-    return json.dumps(
-        {k: config[k] for k in keys}
-        | mesh
-        | {
-            "stability": st,
-            "axis": case.axis,
-            "value": case.value,
-            "model": config["models"][s["model"]],
-        },
-        sort_keys=True,
-    )
-
-
-def design_figures(study):
-    """The figure files of a design study: parameters; a map for a full-factorial grid over two or more
-    parameters with two or more values; sensitivity for sampled studies."""
-    return [
-        paths.design_figure(study, k, ext)
-        for k in ureter_designs.design_figure_kinds(DESIGNS[study])
-        for ext in FIGURE_FORMATS
-    ]
-
-
-def design_figure_outputs(kind):
-    """The figure files of a design study's <kind> (paths.design_figure), one per configured format; the report format
-    goes into the report (caption workflow/report/design_<kind>.rst)."""
-    out = []
-    for ext in FIGURE_FORMATS:
-        path = paths.design_figure(kind=kind, ext=ext)
-        if ext == REPORT_FORMAT:
-            path = report(
-                path, caption=f"../report/design_{kind}.rst", category="Design studies"
-            )
-        out.append(path)
-    return out
-
-
-def design_mesh_inputs(w):
-    """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
-    st, p = DESIGN_MESHES[w.mesh_id]
-    return json.dumps(
-        mesh_sections(p.config, st.model, st.level, p.symmetry),
-        sort_keys=True,
-    )
-
-
-def design_solve_inputs(w):
-    """The point's mesh, and on the one-way rung its wall motion."""
-    p = DESIGNS[w.design_study].point(w.point)
-    out = {"mesh": paths.design_mesh(p.mesh_id)}
-    if p.wall_id:
-        out["wall"] = paths.design_wall_motion(p.wall_id)
-    return out
-
-
-def design_solve_study(w):
-    """The configuration entering a design point's solve, with its rung and symmetry (rerun trigger)."""
-    st = DESIGNS[w.design_study]
-    p = st.point(w.point)
-    sections = run_sections(p.config, st.model)
-    return json.dumps(
-        sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True
-    )
-
-
-def design_solve_mem_mb(w):
-    """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
-    st = DESIGNS[w.design_study]
-    return solve_mem_mb(st.rung, st.point(w.point).symmetry, st.level)
-
-
-def design_corner_inputs(w):
-    """A corner's mesh, and on the one-way rung its wall motion (the fully coupled solve moves its own wall)."""
-    c = DESIGNS[w.design_study].check.corner(w.corner)
-    out = {"mesh": paths.design_mesh(c.mesh_id)}
-    if w.corner_rung == "one_way":
-        out["wall"] = paths.design_wall_motion(c.wall_id)
-    return out
-
-
-def design_corner_study(w):
-    """The configuration entering a corner's solve, with its rung and symmetry (rerun trigger)."""
-    st = DESIGNS[w.design_study]
-    c, cfg = ureter_designs.corner_solve_request(st, w.corner, w.corner_rung)
-    sections = run_sections(cfg, st.model)
-    return json.dumps(
-        sections | {"rung": w.corner_rung, "symmetry": c.symmetry}, sort_keys=True
-    )
-
-
-def design_corner_mem_mb(w):
-    """MiB a corner's solve reserves: that of a study solve on its rung, symmetry and level."""
-    st = DESIGNS[w.design_study]
-    return solve_mem_mb(w.corner_rung, st.check.corner(w.corner).symmetry, st.level)
-
-
-def design_dataset_inputs(w):
-    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
-    st = DESIGNS[w.design_study]
-    out = {"runs": [paths.design_run(st.name, p.id) for p in st.points]}
-    if st.check:
-        out["check"] = paths.rung_check(st.name)
-    return out
-
-
-def design_corner_runs(w):
-    """The run files of a checked study's corners (rung, fully coupled; ureterfsi.designs.expand.corner_run_paths)."""
-    pairs = ureter_designs.corner_run_paths(DESIGNS[w.design_study]).values()
-    return [f for pair in pairs for f in pair]
-
-
-def design_rung_check_caption(wildcards, input):
-    """The dataset's rung_check attribute for the figure captions, once the dataset exists (a function of input:
-    Snakemake keeps it out of the rerun triggers, and evaluates it again when it writes the report).
-    """
-    import xarray as xr
-
-    try:
-        with xr.open_dataset(input[0], decode_times=False) as ds:
-            return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
-    except (
-        OSError,
-        ValueError,
-    ):  # not made yet (or an empty file of `snakemake --touch`)
-        return "measured when the study's dataset is made (its attribute rung_check)"
-
-
-def capped(resource, limit):
-    """`resource` (a rule's value, callable or profile expression) evaluated, then at most `limit`."""
-
-    def value(wildcards, input, attempt, threads, rulename, async_run):
-        v = resource.evaluate(
-            wildcards,
-            input=input,
-            attempt=attempt,
-            threads=threads,
-            rulename=rulename,
-            async_run=async_run,
-        ).value
-        return min(v, limit) if isinstance(v, int) else v
-
-    return Resource(resource.name, value)

@@ -6,18 +6,10 @@
 # run), design_rung_check (the rung error per corner and quantity), design_dataset, and the figures
 # (design_figures, design_map, design_sensitivity).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
-DESIGN_MESHES = {
-    p.mesh_id: (st, p)
-    for st in DESIGNS.values()
-    for p in st.points + (st.check.corners if st.check else [])
-}
-DESIGN_WALLS = {
-    p.wall_id: p
-    for st in DESIGNS.values()
-    for p in st.points + (st.check.corners if st.check else [])
-    if p.wall_id
-}
+# Their inputs, rerun triggers and solves: ureterfsi.designs.jobs; the solve command: common.smk's solve_command.
 
+DESIGN_MESHES = design_jobs.meshes(DESIGNS)
+DESIGN_WALLS = design_jobs.walls(DESIGNS)
 
 if DESIGNS:
 
@@ -71,13 +63,20 @@ if DESIGNS:
             paths.benchmark("designs/{design_study}/{point}")
         threads: 1
         resources:
-            mem_mb=design_solve_mem_mb,
+            tasks=1,
+            mpi=solve_mpi(point_rung),
+            mem_mb=solve_mem_mb_of(
+                point_rung, lambda w: paths.design_run(w.design_study, w.point)
+            ),
             runtime=24 * 60,
+            mumps_out_of_core=out_of_core(point_rung),
         params:
-            study=design_solve_study,
+            # rerun triggers (the command is not one: a function of resources)
+            study=lambda w: design_jobs.solve_trigger(point_solve(w)),
             checkpoint=paths.checkpoint("designs/{design_study}/{point}"),
-        script:
-            "../scripts/design_solve.py"
+            solve=solve_command(point_job),
+        shell:
+            launch.SHELL
 
     rule design_corner_solve:
         input:
@@ -90,15 +89,23 @@ if DESIGNS:
             paths.benchmark("designs/{design_study}/rung_check/{corner}_{corner_rung}")
         threads: 1
         resources:
-            mem_mb=design_corner_mem_mb,
+            tasks=1,
+            mpi=solve_mpi(corner_rung),
+            mem_mb=solve_mem_mb_of(
+                corner_rung,
+                lambda w: paths.corner_run(w.design_study, w.corner, w.corner_rung),
+            ),
             runtime=24 * 60,
+            mumps_out_of_core=out_of_core(corner_rung),
         params:
-            study=design_corner_study,
+            # rerun triggers (the command is not one: a function of resources)
+            study=lambda w: design_jobs.solve_trigger(corner_solve(w)),
             checkpoint=paths.checkpoint(
                 "designs/{design_study}/rung_check/{corner}_{corner_rung}"
             ),
-        script:
-            "../scripts/design_solve.py"
+            solve=solve_command(corner_job),
+        shell:
+            launch.SHELL
 
     rule design_rung_check:
         input:

@@ -27,22 +27,20 @@ if LADDER:
             paths.benchmark("ladder/{rung}")
         threads: 1
         resources:
-            mem_mb=lambda w: solve_mem_mb(*ladder_rung(w)),
+            tasks=1,
+            mpi=solve_mpi(ladder_rung),
+            mem_mb=solve_mem_mb_of(ladder_rung, lambda w: paths.ladder_run(w.rung)),
             runtime=24 * 60,
             mumps_out_of_core=out_of_core(ladder_rung),
         params:
+            # rerun triggers (the command is not one: a function of resources)
             rung=lambda w: LADDER_RUNGS[w.rung],
             end=LADDER["end"],
             model=LADDER["model"],
-            launcher=solve_launcher(ladder_rung),
             checkpoint=paths.checkpoint("ladder/{rung}"),
+            solve=solve_command(ladder_job),
         shell:
-            "{params.launcher} -m ureterfsi.study"
-            " --run-config {input.config} --model {params.model} --level {params.rung[level]}"
-            " --symmetry {params.rung[symmetry]} --fidelity {params.rung[fidelity]} --mesh {input.mesh}"
-            " --out {output} --checkpoint {params.checkpoint} --end {params.end} --dt {params.rung[dt]}"
-            " --out-of-core {resources.mumps_out_of_core}"
-            " > {log} 2>&1"
+            launch.SHELL
 
     rule ladder:
         input:

@@ -1,5 +1,6 @@
 # Meshes (paper §2.1, §2.4.1): one gmsh .msh + JSON sidecar per symmetry, model and level.
 
+
 # Stent-free models are also meshed as the axisymmetric r-z section.
 AXISYMMETRIC_MODELS = [m for m in MODELS if not config["models"][m]["stent"]]
 

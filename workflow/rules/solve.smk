@@ -4,6 +4,7 @@
 # srun on SLURM); every other solve is a serial job without the mpi resource.
 # A killed run resumes from its checkpoint when Snakemake starts it again (checkpoints are kept outside
 # the job's outputs, so Snakemake's clean-up of incomplete outputs does not remove them).
+# The command of every solve rule: ureterfsi.workflow.launch (params solve, common.smk's solve_command).
 
 
 rule solve_config:
@@ -53,18 +54,15 @@ rule solve:
     resources:
         tasks=1,
         mpi=solve_mpi(study_rung),
-        mem_mb=solve_job_mem_mb,
+        mem_mb=solve_mem_mb_of(
+            study_rung, lambda w: paths.run(w.fidelity, w.symmetry, w.model, w.level)
+        ),
         runtime=24 * 60,
         mumps_out_of_core=out_of_core(study_rung),
     params:
+        # rerun triggers (the command is not one: a function of resources)
         checkpoint=paths.checkpoint("{fidelity}/{symmetry}/model{model}_{level}"),
         end=convergence_only_end,
-        wall=solve_wall,
-        launcher=solve_launcher(study_rung),
+        solve=solve_command(study_job),
     shell:
-        "{params.launcher} -m ureterfsi.study"
-        " --run-config {input.config} --model {wildcards.model} --level {wildcards.level}"
-        " --symmetry {wildcards.symmetry} --fidelity {wildcards.fidelity} --mesh {input.mesh}"
-        " --out {output} --checkpoint {params.checkpoint} {params.end} {params.wall}"
-        " --out-of-core {resources.mumps_out_of_core}"
-        " > {log} 2>&1"
+        launch.SHELL

@@ -5,11 +5,13 @@
 # part of `all`).
 import re
 
+from ureterfsi.stability import jobs as stability_jobs
+
 if STABILITY_CASES:
 
     rule stability_case:
         input:
-            mesh=stability_mesh,
+            mesh=lambda w: stability_jobs.case_mesh(config, w.case),
         output:
             paths.stability_case(),
         log:
@@ -20,10 +22,10 @@ if STABILITY_CASES:
             case="|".join(re.escape(c) for c in STABILITY_CASES),
         threads: 1
         resources:
-            mem_mb=stability_memory,
+            mem_mb=lambda w: solve_mem_mb(*stability_jobs.case_rung(config, w.case)),
             runtime=90,
         params:
-            inputs=stability_inputs,
+            inputs=lambda w: stability_jobs.case_trigger(config, w.case),
         script:
             "../scripts/stability_case.py"
 

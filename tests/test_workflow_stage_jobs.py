@@ -1,0 +1,77 @@
+"""What the stability and design rules ask of the package (ureterfsi.stability.jobs, ureterfsi.designs.jobs) and the
+cluster cap of a rule's resource (ureterfsi.workflow.cluster): plain functions, without Snakemake's DAG."""
+import json
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from ureterfsi.config import load_config_files
+from ureterfsi.designs import jobs as design_jobs
+from ureterfsi.designs.expand import studies
+from ureterfsi.stability import cases
+from ureterfsi.stability import jobs as stability_jobs
+from ureterfsi.workflow import paths
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config_files([REPO / "config/config.yaml", REPO / "config/designs/hole_diameter_spacing.yaml"])
+
+
+def test_stability_case_mesh_rung_and_trigger(cfg):
+    names = {c.axis: c.name for c in cases(cfg)}
+    rz, holes, level = names["bulk_ratio"], names["hole_elements"], names["mesh_level"]
+    st = cfg["stability"]
+    assert stability_jobs.case_mesh(cfg, rz) == paths.mesh("axisymmetric", st["model"], st["level"])
+    assert stability_jobs.case_mesh(cfg, holes) == []                     # the case builds its own mesh
+    assert stability_jobs.case_rung(cfg, rz) == ("fully_coupled", "axisymmetric", st["level"])
+    assert stability_jobs.case_rung(cfg, holes) == ("one_way", st["holes"]["symmetry"], st["level"])
+    assert stability_jobs.case_rung(cfg, level)[2] != st["level"]         # the mesh_level axis: its own level
+    trigger = json.loads(stability_jobs.case_trigger(cfg, rz))
+    assert trigger["axis"] == "bulk_ratio" and "axes" not in trigger["stability"] and "mesh" not in trigger
+    assert "mesh" in json.loads(stability_jobs.case_trigger(cfg, holes))
+    # plotting options do not enter a case, every section it reads does
+    other = json.loads(json.dumps(cfg))
+    other["figures"]["dpi"] += 1
+    assert stability_jobs.case_trigger(other, rz) == stability_jobs.case_trigger(cfg, rz)
+    other["time"]["dt"] *= 2
+    assert stability_jobs.case_trigger(other, rz) != stability_jobs.case_trigger(cfg, rz)
+
+
+def test_design_meshes_walls_inputs_and_figures(cfg, tmp_path):
+    designs = studies(cfg)
+    st = designs["hole_diameter_spacing"]
+    meshes, walls = design_jobs.meshes(designs), design_jobs.walls(designs)
+    # 9 points on 9 meshes, 4 corners on the segment on 4 more; one wall motion for the points, one for the corners
+    assert (len(meshes), len(walls)) == (13, 2)
+    assert json.loads(design_jobs.mesh_trigger(*meshes[st.points[0].mesh_id]))["symmetry"] == st.points[0].symmetry
+    assert design_jobs.dataset_inputs(st) == {"runs": [paths.design_run(st.name, p.id) for p in st.points],
+                                              "check": paths.rung_check(st.name)}
+    assert len(design_jobs.corner_runs(st)) == 2 * len(st.check.corners)
+    c = st.check.corners[0]
+    assert "wall" not in design_jobs.corner_inputs(st, c.id, "fully_coupled")
+    assert design_jobs.rung(design_jobs.corner_solve(st, c.id, "fully_coupled")) == ("fully_coupled", c.symmetry,
+                                                                                     st.level)
+    assert design_jobs.figures(st, ["png"]) == [paths.design_figure(st.name, k, "png") for k in ("parameters", "map")]
+    # the caption before the dataset exists, then its attribute
+    path = tmp_path / "d.nc"
+    assert design_jobs.rung_check_caption(path).startswith("measured when")
+    xr.Dataset(attrs={"rung_check": "within 0.05"}).to_netcdf(path)
+    assert design_jobs.rung_check_caption(path) == "within 0.05"
+
+
+def test_cluster_cap_of_a_resource():
+    from snakemake.resources import Resource
+
+    from ureterfsi.workflow.cluster import capped
+
+    def evaluated(resource):
+        return resource.evaluate({}, input=[], attempt=1, threads=1, rulename="r", async_run=None).value
+
+    assert evaluated(capped(Resource("tasks", 32), 8)) == 8
+    assert evaluated(capped(Resource("tasks", 4), 8)) == 4
+    assert evaluated(capped(Resource("mem_mb", lambda w: 64000), 48000)) == 48000
+    assert evaluated(capped(Resource("slurm_extra", "x"), 8)) == "x"

@@ -1,0 +1,111 @@
+"""What the design rules (workflow/rules/designs.smk) ask of the expanded studies, as plain functions: the shared
+meshes and wall motions by id, each job's inputs and configuration (its rerun trigger), the rung a solve runs on
+(its memory reservation and out-of-core factorisation), what its solve command is given
+(ureterfsi.workflow.launch.SolveJob) and a study's figures."""
+from __future__ import annotations
+
+import json
+
+from ureterfsi.config.sections import mesh_sections, run_sections
+from ureterfsi.designs import expand
+from ureterfsi.designs.space import Point, Study
+from ureterfsi.workflow import paths
+
+
+def _points(st: Study) -> list[Point]:
+    return st.points + (st.check.corners if st.check else [])
+
+
+def meshes(designs: dict) -> dict:
+    """{mesh id: (study, point)} of every point and corner of the studies (a mesh shared by several: one of them)."""
+    return {p.mesh_id: (st, p) for st in designs.values() for p in _points(st)}
+
+
+def walls(designs: dict) -> dict:
+    """{wall id: point} of every point and corner on the one-way rung (their shared r-z wall motions)."""
+    return {p.wall_id: p for st in designs.values() for p in _points(st) if p.wall_id}
+
+
+def mesh_trigger(st: Study, p: Point) -> str:
+    """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
+    return json.dumps(mesh_sections(p.config, st.model, st.level, p.symmetry), sort_keys=True)
+
+
+def point_inputs(st: Study, point_id: str) -> dict:
+    """A point's mesh, and on the one-way rung its wall motion."""
+    p = st.point(point_id)
+    out = {"mesh": paths.design_mesh(p.mesh_id)}
+    if p.wall_id:
+        out["wall"] = paths.design_wall_motion(p.wall_id)
+    return out
+
+
+def corner_inputs(st: Study, corner_id: str, rung: str) -> dict:
+    """A corner's mesh, and on the one-way rung its wall motion (the fully coupled solve moves its own wall)."""
+    c = st.check.corner(corner_id)
+    out = {"mesh": paths.design_mesh(c.mesh_id)}
+    if rung == "one_way":
+        out["wall"] = paths.design_wall_motion(c.wall_id)
+    return out
+
+
+def _solve(st: Study, p: Point, cfg: dict, rung: str, name: str, record_failure: bool) -> dict:
+    return {"fidelity": rung, "symmetry": p.symmetry, "model": st.model, "level": st.level,
+            "sections": json.dumps(run_sections(cfg, st.model), sort_keys=True), "name": name,
+            "record_failure": record_failure}
+
+
+def point_solve(st: Study, point_id: str) -> dict:
+    """What a point's solve command is given (the fields of ureterfsi.workflow.launch.SolveJob but its files):
+    the study's rung and level, the point's symmetry and configuration; a failure fails the job, naming the point."""
+    p = st.point(point_id)
+    return _solve(st, p, p.config, st.rung, f"design point {st.name}/{p.id}", False)
+
+
+def corner_solve(st: Study, corner_id: str, rung: str) -> dict:
+    """The same of a corner's solve on `rung` (the study's or the fully coupled reference): a failure is recorded
+    in its run file (the rung is not checked there, which the study's rung check reports) and the job succeeds,
+    so that the study's other corners and its points are still made."""
+    c, cfg = expand.corner_solve_request(st, corner_id, rung)
+    return _solve(st, c, cfg, rung, f"rung-check corner {st.name}/{c.id}", True)
+
+
+def solve_trigger(solve: dict) -> str:
+    """The configuration entering a point's or corner's solve, with its rung and symmetry (rerun trigger)."""
+    sections = json.loads(solve["sections"])
+    return json.dumps(sections | {"rung": solve["fidelity"], "symmetry": solve["symmetry"]}, sort_keys=True)
+
+
+def rung(solve: dict) -> tuple[str, str, str]:
+    """(fidelity, symmetry, level) of a point's or corner's solve: its memory reservation is a study solve's there."""
+    return solve["fidelity"], solve["symmetry"], solve["level"]
+
+
+def dataset_inputs(st: Study) -> dict:
+    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
+    out = {"runs": [paths.design_run(st.name, p.id) for p in st.points]}
+    if st.check:
+        out["check"] = paths.rung_check(st.name)
+    return out
+
+
+def corner_runs(st: Study) -> list[str]:
+    """The run files of a checked study's corners (rung, fully coupled; expand.corner_run_paths)."""
+    return [f for pair in expand.corner_run_paths(st).values() for f in pair]
+
+
+def figures(st: Study, formats) -> list[str]:
+    """The figure files of a design study (expand.design_figure_kinds), one per format."""
+    return [paths.design_figure(st.name, k, ext) for k in expand.design_figure_kinds(st) for ext in formats]
+
+
+def rung_check_caption(dataset_path) -> str:
+    """A design dataset's rung_check attribute for the figure captions; what it will be before the dataset exists
+    (or is the empty file of `snakemake --touch`)."""
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(dataset_path, decode_times=False) as ds:
+            return str(ds.attrs.get("rung_check", "not recorded in the dataset"))
+    except (OSError, ValueError):
+        return "measured when the study's dataset is made (its attribute rung_check)"
