@@ -18,6 +18,8 @@ c_i = d/dx int (v - w) . n da, applied by the Woodbury identity on the kept fact
 one extra back-substitution per boundary and factorisation (Z and C^T Z are kept with it; D, the conditions'
 slopes, is the current iterate's at every iteration), so the exact Jacobian and Newton's quadratic
 convergence at the cost of a few vector assemblies (Vignon-Clementel et al. 2006 couple 0D outlets implicitly).
+The partitioned scheme (fsi.partitioned) applies the same update on its flow block's kept LU, a_i and c_i restricted
+to the block's rows and columns.
 """
 from __future__ import annotations
 
@@ -162,6 +164,8 @@ class EndConditions:
         self._Z = [a.duplicate() for a in self._a]
         self._C = [fem_petsc.create_vector(f) for f in self.c_forms]
         self._CZ = None
+        self._block = None          # (rows, c_i, a_i, Z_i) of a factorised diagonal block, in the block's layout
+        self._used = (self._C, self._Z)     # c_i and Z_i in the layout of the kept factorisation
 
     def __bool__(self):
         return bool(self.boundaries)
@@ -206,26 +210,42 @@ class EndConditions:
         fem_petsc.set_bc(vec, bcs, None, 0.0)        # constrained rows and columns are the identity's
         return vec
 
-    def factorised(self, solve) -> None:
-        """After a fresh factorisation: c_i at the current iterate, Z_i = A^-1 a_i by `solve(rhs, out)` and C^T Z.
-        They do not depend on the conditions' slopes: D is the current iterate's at every correction."""
+    def factorised(self, solve, rows: np.ndarray | None = None) -> None:
+        """After a fresh factorisation of the Jacobian A, or of its diagonal block on the owned local dofs `rows` (the
+        partitioned scheme's flow block, in the block's own layout, a_i and c_i restricted to its rows and columns):
+        c_i at the current iterate, Z_i = A^-1 a_i by `solve(rhs, out)` and C^T Z. They do not depend on the
+        conditions' slopes: D is the current iterate's at every correction."""
         if not self.coupled:
             return
         bcs = self.pb.bcs
         for c, f in zip(self._C, self.c_forms):
             self._assemble(c, f, bcs)
-        for a, z, f in zip(self._a, self._Z, self.a_forms):
-            solve(self._assemble(a, f, bcs), z)
-        self._CZ = np.array([[c.dot(z) for z in self._Z] for c in self._C])
+        for a, f in zip(self._a, self.a_forms):
+            self._assemble(a, f, bcs)
+        C, rhs, Z = self._C, self._a, self._Z
+        if rows is not None:
+            if self._block is None or self._block[0] is not rows:
+                k = len(C)
+                vecs = [PETSc.Vec().createMPI((len(rows), PETSc.DECIDE), comm=self.pb.comm) for _ in range(3 * k)]
+                self._block = (rows, vecs[:k], vecs[k:2 * k], vecs[2 * k:])
+            _, C, rhs, Z = self._block
+            for whole, part in zip(self._C + self._a, C + rhs):
+                part.array[:] = whole.array_r[rows]
+        for a, z in zip(rhs, Z):
+            solve(a, z)
+        self._used = (C, Z)
+        self._CZ = np.array([[c.dot(z) for z in Z] for c in C])
 
     def correct(self, dx: PETSc.Vec) -> None:
-        """dx <- dx - Z (I + D C^T Z)^-1 D C^T dx (Woodbury; dx = A^-1 b on entry), D = diag(s_i dp_i/dQ_i) of the
-        current iterate (update()), so the rank-k term is the current Jacobian's also on a kept factorisation."""
+        """dx <- dx - Z (I + D C^T Z)^-1 D C^T dx (Woodbury; dx = A^-1 b on entry, in the layout of the last
+        `factorised`), D = diag(s_i dp_i/dQ_i) of the current iterate (update()), so the rank-k term is the current
+        Jacobian's also on a kept factorisation."""
         if self._CZ is None:
             return
+        C, Z = self._used
         D = np.diag(self.slope[self.coupled])
-        coef = np.linalg.solve(np.eye(len(self._Z)) + D @ self._CZ, D @ np.array([c.dot(dx) for c in self._C]))
-        for z, g in zip(self._Z, coef):
+        coef = np.linalg.solve(np.eye(len(Z)) + D @ self._CZ, D @ np.array([c.dot(dx) for c in C]))
+        for z, g in zip(Z, coef):
             dx.axpy(-g, z)
 
     def accept(self) -> None:

@@ -162,10 +162,19 @@ class PartitionedCoupling(SweepPolicyMethods):
             factor.refresh(matrix, self.index[name], rate)
             if forms is not None:
                 self.bind_direct(name)
+        if name == "flow" and pb.end_conditions:
+            pb.end_conditions.factorised(self._flow_solve, self.splits["flow"])
         pb.timings[f"{name}_factorise"] += time.perf_counter() - t1
         pb.counters[f"{name}_factorisations"] += 1
         if pb.counters[f"{name}_factorisations"] == 1:        # the set-up's progress: the first LUs are its longest
             log.info("%s block: %d unknowns, first Jacobian and LU in %.1f s", name, self.sizes[name], time.perf_counter() - t0)
+
+    def _flow_solve(self, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = A_FF^-1 rhs by the flow block's kept LU (the end conditions' Woodbury term)."""
+        failed = self.factors["flow"].solve(rhs, out)
+        if failed:
+            self.invalidate()
+            raise NewtonDivergence(f"flow block: {failed}", [])
 
     def _matrix_on_W(self, name: str) -> PETSc.Mat:
         """The Jacobian on W whose block `name` is factorised: the block's own form (the urine's, the condensed
@@ -216,6 +225,8 @@ class PartitionedCoupling(SweepPolicyMethods):
             pb._assemble_residual()
             return pb.b
         t0 = time.perf_counter()
+        if name != "mesh" and pb.end_conditions:
+            pb.end_conditions.update()      # the face pressures of the current iterate (the mesh rows have none)
         vec = self._row_vectors[name]
         if name == "mesh":
             pb.assemble_mesh_rows(vec)
@@ -249,6 +260,8 @@ class PartitionedCoupling(SweepPolicyMethods):
             if failed:
                 self.invalidate()
                 raise NewtonDivergence(f"{name} block: {failed}", [norm])
+            if name == "flow" and pb.end_conditions:
+                pb.end_conditions.correct(dx)
             pb.timings[f"{name}_solve"] += time.perf_counter() - t0
             pb.counters[f"{name}_solves"] += 1
             pb.x.x.array[dofs] -= dx.array_r

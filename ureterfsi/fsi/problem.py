@@ -69,9 +69,6 @@ class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
         self.fluid_tags, self.solid_tags = fluid_tags, solid_tags
         self.segregated = opts.mesh_motion_coupling == "segregated"
         lumped = any(ob.condition is not None for ob in scene.open_boundaries)
-        if lumped and opts.coupling_scheme != "monolithic":
-            raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs coupling_scheme "
-                             "'monolithic' (the partitioned sweeps do not carry its Jacobian term)")
         if lumped and opts.urine_step != "newton":
             raise ValueError("an open boundary's lumped condition (Waveform, Compartment, Valve) needs urine_step "
                              "'newton' (the linearly implicit step does not carry its Jacobian term)")
