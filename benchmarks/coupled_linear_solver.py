@@ -6,7 +6,8 @@ the same mesh: unknowns, the split sizes, Newton and Krylov iterations per step,
 Jacobians and factorisations (of each block), where the time went (residual and Jacobian assembly, each block's
 factorisation, GMRES), CPU time per step (of the busiest rank and of all), peak memory (max RSS, summed over the
 ranks), and the largest difference of the final state from the first run's per field, relative to the field's max
-norm (fields ordered by dof coordinates, so runs on different process counts compare). `--processes 1 2` runs each
+norm (fields ordered by dof coordinates, so runs on different process counts compare), and of the lumped end
+conditions' face pressures and fluxes (fsi.end_conditions), where the scene has them. `--processes 1 2` runs each
 variant on 1 and on 2 MPI processes. On a shared machine compare the ratios
 (the CPU ones are the least sensitive to other jobs).
 
@@ -90,6 +91,7 @@ def run_variant(args):
            "cpu_s": comm.allreduce(cpu, MPI.MAX), "cpu_total_s": comm.allreduce(cpu),
            "s_per_step": [r.wall_time for r in records], "newton": [r.newton_iterations for r in records],
            "krylov": krylov.per_step, "counters": dict(pb.counters), "timings": dict(pb.timings),
+           "end_pressures": pb.end_conditions.p.tolist(), "end_fluxes": pb.end_conditions.q.tolist(),
            "peak_gib": peak, "jacobian_entries": (pb.A.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]
                                                    if pb.partitioned is None else 0)}
     if pb.partitioned is not None:
@@ -119,12 +121,16 @@ def field_values(pb, name, comm):
 
 def report(res, ref):
     """One line per run: unknowns, iterations, time per step (wall and CPU) and where it went, memory, and the
-    final state's largest difference from `ref` per field, relative to the field's max norm."""
+    final state's largest difference from `ref`'s per field, relative to the field's max norm, and the lumped end
+    conditions' face pressures and fluxes (fsi.end_conditions) with their largest relative difference from `ref`'s."""
     import numpy as np
     c, tm = res["counters"], res["timings"]
     blocks = ", ".join(f"{n} {c[f'{n}_factorisations']}" for n in ("solid", "mesh", "flow") if f"{n}_factorisations" in c)
-    diff = ", ".join(f"{f} {np.abs(a - ref[f]).max() / np.abs(ref[f]).max():.1e}"
-                     for f, a in res["state"].items() if np.abs(ref[f]).max() > 0)
+    diff = ", ".join(f"{f} {np.abs(a - ref['state'][f]).max() / np.abs(ref['state'][f]).max():.1e}"
+                     for f, a in res["state"].items() if np.abs(ref["state"][f]).max() > 0)
+    ends = "".join(f"; lumped ends' {k.split('_')[1]} {[float(f'{v:.7g}') for v in res[k]]} (vs first: "
+                   f"{np.abs(np.subtract(res[k], ref[k])).max() / np.abs(ref[k]).max():.1e})"
+                   for k in ("end_pressures", "end_fluxes") if res[k])
     print(f"- {res['variant']}, {res['processes']} process(es): {res['unknowns']} unknowns, set-up {res['setup_s']:.1f} s, steady {res['steady_s']:.1f} s "
           f"({res['steady_newton']} Newton), {res['wall_s'] / res['steps']:.2f} s/step "
           f"{[round(s, 1) for s in res['s_per_step']]} (CPU {res['cpu_s'] / res['steps']:.2f} s/step on the "
@@ -139,7 +145,7 @@ def report(res, ref):
                                                       "flow_factorise", "krylov", "solid_solve", "flow_solve",
                                                       "assemble_flow_jacobian", "assemble_solid_jacobian",
                                                       "assemble_block_rows") if k in tm)
-          + f"; peak {res['peak_gib']:.2f} GiB; state vs first: {diff}", flush=True)
+          + f"; peak {res['peak_gib']:.2f} GiB; state vs first: {diff}" + ends, flush=True)
 
 
 def main():
@@ -196,7 +202,7 @@ def main():
                 res = json.loads(lines[-1][len("RESULT "):])
                 res["state"] = dict(np.load(state))
                 results.append(res)
-                report(res, results[0]["state"])
+                report(res, results[0])
     by = {run: [r for r in results if (r["variant"], r["processes"]) == run] for run in runs}
     mean = {run: {k: np.mean([r[k] / r["steps"] for r in by[run]]) for k in ("wall_s", "cpu_s", "cpu_total_s")}
             for run in by}

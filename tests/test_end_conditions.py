@@ -1,8 +1,9 @@
 """Lumped end conditions (fsi.end_conditions) on a rigid axisymmetric pipe (scenes.rigid_pipe) against exact
 solutions and conservation: the 0D pelvis's exponential relaxation (time constant R C, R the pipe's Poiseuille
 resistance), the mass balance of production, outflow and storage, the reflux volume of a voiding pressure step
-(and its split by the scene's flux_split),
-Newton's convergence with the Jacobian's rank-k term, the valve's law and the checkpoint of the 0D state."""
+(and its split by the scene's flux_split), Newton's convergence with the Jacobian's rank-k term, the valve's law and
+the checkpoint of the 0D state; the partitioned sweeps (fsi.partitioned) with the same conditions against Newton on an
+elastic tube (the rigid pipe has no wall to partition)."""
 import math
 
 import numpy as np
@@ -185,12 +186,75 @@ def test_checkpointed_end_state_restores_the_run():
     assert saved["end_conditions"]["p_n"] != pb.end_conditions.state()["p_n"]
 
 
-def test_partitioned_scheme_refuses_lumped_conditions():
-    from dataclasses import replace
-    pelvis = OpenBoundary([INLET], backflow=0.0, condition=Compartment(TAU / R, lambda t: 0.0, P0))
-    with pytest.raises(ValueError, match="coupling_scheme 'monolithic'"):
-        MonolithicFSI(rigid_pipe_scene(PIPE, 2, pelvis, OpenBoundary([OUTLET], 0.0)),
-                      replace(TIGHT, coupling_scheme="partitioned"))
+TUBE_R = 3.5e7             # Pa s/m^3, ~ the test tube's Poiseuille resistance 8 mu L / (pi R_i^4)
+SWEEPS = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10, reuse_jacobian=True,
+              coupling_scheme="partitioned", newton_field_rtol=1e-8)
+EXACT = dict(linear_solver="mumps", reuse_jacobian=False, newton_rtol=1e-12, newton_atol=1e-20, newton_stol=1e-13,
+             newton_max_iterations=40)
+PRODUCTION = 2.0e-8         # m^3/s
+
+
+def tube_with_ends(outlet: str, **options):
+    """The elastic test tube (tests/_engine_cases) between a pelvis (R C = 0.01 s, filled at PRODUCTION) and a
+    bladder whose pressure oscillates (50 Pa at 32 Hz): at its face (`outlet` "waveform") or through a valve."""
+    from _engine_cases import INLET as TUBE_INLET, OUTLET as TUBE_OUTLET, tube_case
+    bladder = lambda t: 50.0 * math.sin(200.0 * t)      # noqa: E731
+    case = tube_case()
+    case.scene.open_boundaries = [
+        OpenBoundary([TUBE_INLET], 0.0, condition=Compartment(0.01 / TUBE_R, lambda t: PRODUCTION, 100.0)),
+        OpenBoundary([TUBE_OUTLET], 0.0, condition=Waveform(bladder) if outlet == "waveform"
+                     else Valve(bladder, TUBE_R, 1e3 * TUBE_R, 1.0))]
+    return MonolithicFSI(case.scene, SolverOptions(**options))
+
+
+def tube_ends_run(outlet, steps=4, **options):
+    pb = tube_with_ends(outlet, **options)
+    pb.solve_steady()
+    return pb, [pb.step(2e-3)[0] for _ in range(steps)]
+
+
+@pytest.mark.parametrize("outlet", ["waveform", "valve"])
+def test_partitioned_sweeps_reach_the_monolithic_solution_with_lumped_ends(outlet):
+    """The sweeps carry the face pressures of the current iterate and the rank-k term on the flow block's LU: their
+    fixed point is Newton's, to the sweeps' tolerance (every field, the pelvic and bladder pressures and the end
+    fluxes within newton_field_rtol = 1e-8), in as many sweeps per step as with open ends (test_partitioned: <= 8)."""
+    from _engine_cases import field_errors
+    exact, _ = tube_ends_run(outlet, **EXACT)
+    pb, sweeps = tube_ends_run(outlet, **SWEEPS)
+    errors = field_errors(pb, exact)
+    a, b = pb.end_conditions, exact.end_conditions
+    ends = {"p": np.abs(a.p - b.p).max() / np.abs(b.p).max(), "Q": np.abs(a.q - b.q).max() / np.abs(b.q).max()}
+    print(f"\n[partitioned, pelvis + bladder {outlet}] sweeps {sweeps}, flow LUs "
+          f"{pb.counters['flow_factorisations']}; fields vs Newton "
+          f"{' '.join(f'{f} {e:.1e}' for f, e in errors.items())}; end pressures {ends['p']:.1e}, "
+          f"fluxes {ends['Q']:.1e}")
+    assert max(errors.values()) <= 1e-8 and max(ends.values()) <= 1e-8, (errors, ends)
+    assert max(sweeps) <= 8, sweeps
+
+
+def test_partitioned_sweeps_need_the_flow_blocks_rank_k_term(monkeypatch):
+    """Without the Woodbury term on the flow block's LU the compartment's steady pseudo-step (dp/dQ = 1e3 s / C, 1e5
+    times the tube's resistance) is a diverging fixed point of the flow block's iteration."""
+    from ureterfsi.fsi import NewtonDivergence
+    monkeypatch.setattr(EndConditions, "correct", lambda self, dx: None)
+    with pytest.raises(NewtonDivergence):
+        tube_with_ends("valve", **SWEEPS).solve_steady()
+
+
+def test_partitioned_steady_state_drains_the_production_and_restores_its_checkpoint():
+    """Partitioned, on the elastic tube: the steady state drains the pelvis's production through the tube (Q_in =
+    Q_out = Q_prod); state()/set_state() carry the 0D history, a restored run repeats the pressures to the sweeps'
+    tolerance (the kept LUs and mixing differ, the fixed point does not)."""
+    pb = tube_with_ends("valve", **SWEEPS)
+    pb.solve_steady()
+    q_in, q_out = pb.end_conditions.q
+    assert -q_in == pytest.approx(PRODUCTION, rel=1e-8) and q_out == pytest.approx(PRODUCTION, rel=1e-8)
+    pb.step(2e-3)
+    saved = pb.state()
+    run = [pb.step(2e-3) and pb.end_conditions.p.copy() for _ in range(2)]
+    pb.set_state(saved)
+    again = [pb.step(2e-3) and pb.end_conditions.p.copy() for _ in range(2)]
+    assert np.allclose(run, again, rtol=1e-8, atol=0.0)
 
 
 @pytest.mark.parametrize("change, key, text", [
