@@ -21,7 +21,11 @@ sweep by more than newton_field_rtol of its max norm. Each block's LU (MUMPS) is
 and refreshed when its iteration contracts by less than block_reuse_contraction or when the sweeps a stale LU costs
 outweigh a refresh (block_refresh_sweeps, RefreshSchedule): A_SS from the whole Jacobian, A_MM the
 fixed extension operator (factorised once), A_FF from the derivative of the flow rows in the velocity and pressure
-directions only (exactly the Jacobian's flow block, a third of its assembly cost). Why it pays: the coupling is
+directions only (exactly the Jacobian's flow block, a third of its assembly cost). Lumped end conditions
+(fsi.end_conditions) as in Newton's solve: their face pressures evaluated from the current iterate before each
+block's rows, their rank-k Jacobian term applied on the flow block's kept LU by the Woodbury identity (its
+restriction to the flow rows and columns; the wall's LU, whose rows meet the end faces only at their rims, keeps
+its block without it: its updates, not the fixed point, are the poorer). Why it pays: the coupling is
 weak (the sweeps contract by ~3e-3 on the ureter) while Newton on the whole system applies every block's factor
 in each Krylov iteration of each Newton iteration (docs/performance.md). This module makes the sweeps and the blocks'
 solves; when an LU is refreshed, how the sweeps are mixed and when they stop is fsi.sweep_policy's.
