@@ -8,6 +8,8 @@ from snakemake.exceptions import WorkflowError
 from snakemake.resources import Resource
 
 from ureterfsi.designs import expand as ureter_designs
+from ureterfsi.designs.passage import escalated_from_file
+from ureterfsi.designs.rung_check import REFERENCE_RUNG, reference_config
 from ureterfsi.config import (
     ConfigError,
     deep_merge,
@@ -296,7 +298,7 @@ def design_mesh_inputs(w):
     """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
     st, p = DESIGN_MESHES[w.mesh_id]
     return json.dumps(
-        mesh_sections(p.config, st.model, st.level, p.symmetry),
+        mesh_sections(p.config, p.model, st.level, p.symmetry),
         sort_keys=True,
     )
 
@@ -311,19 +313,40 @@ def design_solve_inputs(w):
 
 
 def design_solve_study(w):
-    """The configuration entering a design point's solve, with its rung and symmetry (rerun trigger)."""
-    st = DESIGNS[w.design_study]
-    p = st.point(w.point)
-    sections = run_sections(p.config, st.model)
+    """The configuration entering a design point's (or reference run's) solve, with its rung and symmetry (rerun
+    trigger)."""
+    p = DESIGNS[w.design_study].point(w.point)
+    sections = run_sections(p.config, p.model)
     return json.dumps(
-        sections | {"rung": st.rung, "symmetry": p.symmetry}, sort_keys=True
+        sections | {"rung": p.rung, "symmetry": p.symmetry}, sort_keys=True
     )
 
 
 def design_solve_mem_mb(w):
     """MiB a design point's solve reserves: that of a study solve on its rung, symmetry and level."""
     st = DESIGNS[w.design_study]
-    return solve_mem_mb(st.rung, st.point(w.point).symmetry, st.level)
+    p = st.point(w.point)
+    return solve_mem_mb(p.rung, p.symmetry, st.level)
+
+
+def design_escalated_mesh(w):
+    """An escalated point's mesh (its fully coupled solve moves its own wall)."""
+    return paths.design_mesh(DESIGNS[w.design_study].point(w.point).mesh_id)
+
+
+def design_escalated_study(w):
+    """The configuration entering a design point's escalated (fully coupled) solve (rerun trigger)."""
+    p = DESIGNS[w.design_study].point(w.point)
+    sections = run_sections(reference_config(p.config), p.model)
+    return json.dumps(
+        sections | {"rung": REFERENCE_RUNG, "symmetry": p.symmetry}, sort_keys=True
+    )
+
+
+def design_escalated_mem_mb(w):
+    """MiB a design point's escalated solve reserves: that of a fully coupled study solve."""
+    st = DESIGNS[w.design_study]
+    return solve_mem_mb(REFERENCE_RUNG, st.point(w.point).symmetry, st.level)
 
 
 def design_corner_inputs(w):
@@ -352,9 +375,24 @@ def design_corner_mem_mb(w):
 
 
 def design_dataset_inputs(w):
-    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
+    """The study's point and reference runs, and for a checked study its rung check (checkpoint design_rung_check);
+    under rung_check.on_failure: escalate, once the check is made, the escalated points' fully coupled runs in place
+    of theirs (ureterfsi.designs.passage.escalated_points)."""
     st = DESIGNS[w.design_study]
-    out = {"runs": [paths.design_run(st.name, p.id) for p in st.points]}
+    escalated = []
+    if st.check and st.check.on_failure == "escalate":
+        made = checkpoints.design_rung_check.get(design_study=st.name).output[0]
+        escalated = escalated_from_file(st, made)
+    out = {
+        "runs": [
+            (
+                paths.escalated_run(st.name, p.id)
+                if p.id in escalated
+                else paths.design_run(st.name, p.id)
+            )
+            for p in st.points + st.references
+        ]
+    }
     if st.check:
         out["check"] = paths.rung_check(st.name)
     return out

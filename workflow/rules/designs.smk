@@ -1,20 +1,22 @@
 # Design studies (config `design_studies`, ureterfsi.designs.space): every point its own chain of jobs.
 # Meshes and wall motions are content-addressed (shared by every point with the same geometry / wall). The
 # rules (their paths: ureterfsi.workflow.paths): design_mesh, design_wall_motion (one-way rung), design_solve
-# (a point), design_corner_solve (a corner of the design space on the segment, on the study's rung and fully
-# coupled, ureterfsi.designs.rung_check; a corner that is a point of a study on the segment reuses the point's
-# run), design_rung_check (the rung error per corner and quantity), design_dataset, and the figures
-# (design_figures, design_map, design_sensitivity).
+# (a point or a reference run), design_corner_solve (a corner of the design space on the segment, on the study's
+# rung and fully coupled, ureterfsi.designs.rung_check; a corner that is a point of a study on the segment reuses
+# the point's run), the checkpoint design_rung_check (the rung error per corner and quantity; under
+# rung_check.on_failure: escalate, design_dataset's input function reads it and asks design_escalated_solve for
+# the points nearest a failing corner), design_dataset, and the figures (design_figures, design_map,
+# design_sensitivity).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 DESIGN_MESHES = {
     p.mesh_id: (st, p)
     for st in DESIGNS.values()
-    for p in st.points + (st.check.corners if st.check else [])
+    for p in ureter_designs.points_and_corners(st)
 }
 DESIGN_WALLS = {
     p.wall_id: p
     for st in DESIGNS.values()
-    for p in st.points + (st.check.corners if st.check else [])
+    for p in ureter_designs.points_and_corners(st)
     if p.wall_id
 }
 
@@ -79,6 +81,25 @@ if DESIGNS:
         script:
             "../scripts/design_solve.py"
 
+    rule design_escalated_solve:
+        input:
+            mesh=design_escalated_mesh,
+        output:
+            paths.escalated_run(),
+        log:
+            paths.log("designs/{design_study}/{point}_fully_coupled"),
+        benchmark:
+            paths.benchmark("designs/{design_study}/{point}_fully_coupled")
+        threads: 1
+        resources:
+            mem_mb=design_escalated_mem_mb,
+            runtime=24 * 60,
+        params:
+            study=design_escalated_study,
+            checkpoint=paths.checkpoint("designs/{design_study}/{point}_fully_coupled"),
+        script:
+            "../scripts/design_solve.py"
+
     rule design_corner_solve:
         input:
             unpack(design_corner_inputs),
@@ -100,7 +121,7 @@ if DESIGNS:
         script:
             "../scripts/design_solve.py"
 
-    rule design_rung_check:
+    checkpoint design_rung_check:
         input:
             design_corner_runs,
         output:
