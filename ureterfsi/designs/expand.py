@@ -57,14 +57,15 @@ def on_rung(cfg: dict, model: str, rung: str) -> dict:
 
 
 def _checked(cfg: dict, model: str, key: str, what: str) -> None:
-    """check_config(cfg) and the occlusion's posability on `model`; ConfigError naming `key` and `what`."""
+    """check_config(cfg) and the occlusion's posability on `model`; ConfigError naming `key`, `what` (it cannot be
+    posed ...) and why."""
     try:
         check_config(cfg)
     except ConfigError as err:
-        raise ConfigError(key, f"{what} cannot be posed: {err.key}: {err.constraint}") from None
+        raise ConfigError(key, f"{what}: {err.key}: {err.constraint}") from None
     why = occlusion_unposable(cfg, model)
     if why:
-        raise ConfigError(key, f"{what} cannot be posed: {why}")
+        raise ConfigError(key, f"{what}: {why}")
 
 
 def _check_study(cfg: dict, name: str, spec: dict) -> None:
@@ -226,7 +227,7 @@ def expand_references(cfg: dict, name: str, spec: dict, study: Study) -> list:
         fidelity, base_symmetry = run_rung(cfg, model)
         rung = ref.get("rung", study.rung)
         rcfg = on_rung(deep_merge(cfg, ref.get("overlay") or {}), model, rung)
-        _checked(rcfg, model, key, f"reference {ref['name']} (model {model})")
+        _checked(rcfg, model, key, f"reference {ref['name']} (model {model}) cannot be posed")
         symmetry = point_symmetry(rcfg, base_symmetry)
         if rung == "one_way" and symmetry == "axisymmetric":
             raise ConfigError(f"{key}.rung", f"one_way needs a 3D mesh; model {model} runs {symmetry}")
@@ -275,7 +276,8 @@ def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungChe
         cid = point_id(values)
         ccfg = on_rung(apply(seg, study.model, values), study.model, study.rung)
         ccfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", ccfg["solver"]["one_way_mesh_motion"])
-        _checked(ccfg, study.model, key, f"corner {cid} ({_values_text(values)}) on the segment {opts['segment']}")
+        _checked(ccfg, study.model, key,
+                 f"corner {cid} ({_values_text(values)}) cannot be posed on the segment {opts['segment']}")
         symmetry = point_symmetry(ccfg, base_symmetry)
         if symmetry == "axisymmetric":
             raise ConfigError(key, f"the fully coupled reference of corner {cid} needs a 3D mesh; model "
