@@ -253,3 +253,56 @@ def test_passage_quantities_of_the_dataset_pass_the_cf_checker(tmp_path):
     report = json.loads(Path(str(path) + ".cc.json").read_text())["cf:1.8"]
     assert errors == 0, report["high_priorities"]
     assert warnings == 0, [r for r in report["medium_priorities"] if r["msgs"]]
+
+
+# ------------------------------------------------------------------------------------------ end to end
+
+@pytest.mark.slow
+def test_two_by_two_occlusion_study_end_to_end(tmp_path):
+    """tests/data/occlusion-holes-mini.yaml: occlusion position (4.5, 5.5 mm) x hole-pair arrangement on the 10 mm
+    segment, fully coupled, the pelvis filled at 1 mL/min and the bladder at its filling pressure, two steps of 20
+    ms, with the unstented and the stented unobstructed references: configuration -> meshes -> solves -> dataset ->
+    figures. The physics: the annulus is closed at the occlusion, so the stent lumen carries the flow past it; the
+    production enters the stent through the hole upstream and leaves it through the one downstream; the pelvis
+    stands above the bladder. The dataset passes the CF checker."""
+    from test_cf import cf_errors
+    from test_workflow_e2e import job_counts, ok, snakemake
+
+    cfg = mini_occlusion_config(tmp_path)
+    path = tmp_path / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_occlusion_mini", timeout=5400)))
+    assert counts == {"design_mesh": 6, "design_solve": 6, "design_dataset": 1, "design_figures": 1,
+                      "design_map": 1, "design_passage": 1, "design_occlusion_mini": 1}, counts
+    dataset = tmp_path / "results/designs/occlusion_mini.nc"
+    with xr.open_dataset(dataset, decode_times=False) as ds:
+        ds.load()
+    print("\n2x2 occlusion study:", {q: ds[q].values.round(12).tolist() for q in (
+        "obstruction_lumen_fraction", "hole_net_volume", "hole_gross_exchange_volume", "hole_wall_tawss",
+        "hole_wall_low_wss_area_fraction", "peak_pelvic_pressure", "stent_lumen_fraction", "wall_time")},
+          {q: ds[q].values.round(12).tolist() for q in ds.variables if q.startswith("reference")})
+    assert ds["obstruction_lumen_fraction"].dims == ("occlusion_position", "hole_pair_rotation")
+    assert (ds["obstruction_lumen_fraction"].values > 0.9).all()
+    up = ds["hole_proximal"].values == 1
+    assert up.sum(axis=-1).tolist() == [[1, 1], [1, 1]] and (ds["hole_proximal"].values[~up] == 0).all()
+    net = ds["hole_net_volume"].values                    # positive out of the stent
+    assert (net[up] < 0).all() and (net[~up] > 0).all(), net
+    gross = ds["hole_gross_exchange_volume"].values
+    assert (gross >= np.abs(net) * (1 - 1e-9)).all()
+    for q in ("hole_wall_tawss", "hole_wall_low_wss_area_fraction"):
+        assert np.isfinite(ds[q].values).all() and (ds[q].values >= 0).all(), q
+    bladder = cfg["ends"]["bladder"]["filling_pressure"] if False else 980.7
+    assert (ds["peak_pelvic_pressure"].values > bladder).all()
+    assert (ds["rung"].values == "fully_coupled").all()
+    assert list(ds["reference"].values) == ["unstented", "stented"]
+    assert np.isnan(ds["obstruction_lumen_fraction"]).sum() == 0
+    assert (ds["reference_peak_pelvic_pressure"].values > bladder).all()
+    for name, var in ds.variables.items():
+        assert var.attrs.get("units") and var.attrs.get("long_name"), name
+    errors, warnings = cf_errors(dataset)
+    report = json.loads(Path(str(dataset) + ".cc.json").read_text())["cf:1.8"]
+    assert errors == 0, report["high_priorities"]
+    assert warnings == 0, [r for r in report["medium_priorities"] if r["msgs"]]
+    for kind in ("parameters", "map", "passage"):
+        for ext in cfg["figures"]["formats"]:
+            assert (tmp_path / f"results/figures/designs/occlusion_mini_{kind}.{ext}").stat().st_size > 0, kind

@@ -354,8 +354,12 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 
 def design_figure_kinds(st: Study) -> list:
     """The figures of a study: parameters; a map for a full-factorial grid over two or more parameters with two or
-    more values; sensitivity for a sample."""
+    more values; sensitivity for a sample; passage (per hole against its position) for a study of the whole passage:
+    a stented one with a complete occlusion or reference runs."""
+    passage = (bool(st.references) or any(p.config["geometry"]["occlusion_length"] > 0 for p in st.points)) and \
+        st.points[0].config["models"][st.model]["stent"]
     return (["parameters"] + (["map"] if len(map_parameters(st.grid)) >= 2 else [])
-            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else []))
+            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else [])
+            + (["passage"] if passage else []))
 
 

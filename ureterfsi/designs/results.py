@@ -35,7 +35,8 @@ SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole
            "wall_time", "peak_pressure_drop", "mean_pressure_drop", "obstruction_lumen_fraction") + STENT_SURFACE + (
     HOLE_SURFACE + END_CONDITIONS)
 QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",   # figures, indices
-              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop")
+              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop",
+              "peak_pelvic_pressure", "obstruction_lumen_fraction")     # NaN with open ends / without an obstruction
 SOBOL_INDICES = {"sobol_first_order": "S1", "sobol_first_order_conf": "S1_conf",   # dataset name: SALib's key
                  "sobol_total": "ST", "sobol_total_conf": "ST_conf"}
 SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement",

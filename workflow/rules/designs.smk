@@ -6,7 +6,7 @@
 # the point's run), the checkpoint design_rung_check (the rung error per corner and quantity; under
 # rung_check.on_failure: escalate, design_dataset's input function reads it and asks design_escalated_solve for
 # the points nearest a failing corner), design_dataset, and the figures (design_figures, design_map,
-# design_sensitivity).
+# design_sensitivity, design_passage).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 DESIGN_MESHES = {
     p.mesh_id: (st, p)
@@ -176,6 +176,19 @@ if DESIGNS:
             design_figure_outputs("sensitivity"),
         log:
             paths.log("designs/{design_study}_sensitivity"),
+        params:
+            dpi=FIGURE_OPTIONS["dpi"],
+            rung_check=design_rung_check_caption,
+        script:
+            "../scripts/design_figures.py"
+
+    rule design_passage:
+        input:
+            paths.design_dataset(),
+        output:
+            design_figure_outputs("passage"),
+        log:
+            paths.log("designs/{design_study}_passage"),
         params:
             dpi=FIGURE_OPTIONS["dpi"],
             rung_check=design_rung_check_caption,
