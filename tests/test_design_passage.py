@@ -159,6 +159,19 @@ def test_a_failing_corner_escalates_its_region_in_the_job_plan(tmp_path):
                       "design_s": 1}, counts
 
 
+def test_an_escalating_study_plans_every_point_before_its_rung_check(tmp_path):
+    """The dataset's inputs wait for the checkpoint, but design_<study> asks for every point's and reference's run:
+    a dry run of stricture_holes lists them all (18 + 2), its 8 corners' fully coupled solves (the corners are grid
+    points: their one-way runs serve) and one wall motion per stricture position and the stented reference."""
+    from test_designs import _dry
+
+    cfg = deep_merge(copy.deepcopy(BASE), yaml.safe_load((REPO / "config/designs/stricture_holes.yaml").read_text()))
+    counts = _dry(tmp_path, cfg, "design_stricture_holes")
+    assert counts == {"design_mesh": 20, "design_wall_motion": 4, "design_solve": 20, "design_corner_solve": 8,
+                      "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
+                      "design_passage": 1, "design_stricture_holes": 1}, counts
+
+
 def test_the_dataset_records_the_rung_of_each_point(tmp_path):
     from test_designs_rung_check import _fake_run
 

@@ -203,6 +203,11 @@ if DESIGNS:
             input:
                 paths.design_dataset(_study),
                 design_figures(_study),
+                # every point's run up front: under escalate the dataset's inputs wait for the rung check
+                [
+                    paths.design_run(_study, p.id)
+                    for p in DESIGNS[_study].points + DESIGNS[_study].references
+                ],
 
         if DESIGNS[_study].check:
 
