@@ -296,6 +296,11 @@ def test_two_by_two_occlusion_study_end_to_end(tmp_path):
           {q: ds[q].values.round(12).tolist() for q in ds.variables if q.startswith("reference")})
     assert ds["obstruction_lumen_fraction"].dims == ("occlusion_position", "hole_pair_rotation")
     assert (ds["obstruction_lumen_fraction"].values > 0.9).all()
+    # the initial steady state drains the production (docs/end-conditions.md): what enters passes the occlusion,
+    # all of it in the lumen (the flux through the plane is consistent with the continuity rows)
+    production = cfg["ends"]["kidney"]["urine_production"]
+    for q in ("inlet_flux", "obstruction_flux", "obstruction_lumen_flux"):
+        np.testing.assert_allclose(ds[q].isel(time=0).values, production, rtol=1e-4, err_msg=q)
     up = ds["hole_proximal"].values == 1
     assert up.sum(axis=-1).tolist() == [[1, 1], [1, 1]] and (ds["hole_proximal"].values[~up] == 0).all()
     net = ds["hole_net_volume"].values                    # positive out of the stent
