@@ -278,7 +278,6 @@ def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     figures. The physics: the annulus is closed at the occlusion, so the stent lumen carries the flow past it; the
     production enters the stent through the hole upstream and leaves it through the one downstream; the pelvis
     stands above the bladder. The dataset passes the CF checker."""
-    from test_cf import cf_errors
     from test_workflow_e2e import job_counts, ok, snakemake
 
     cfg = mini_occlusion_config(tmp_path)
@@ -287,7 +286,14 @@ def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_occlusion_mini", timeout=5400)))
     assert counts == {"design_mesh": 6, "design_solve": 6, "design_dataset": 1, "design_figures": 1,
                       "design_map": 1, "design_passage": 1, "design_occlusion_mini": 1}, counts
-    dataset = tmp_path / "results/designs/occlusion_mini.nc"
+    check_occlusion_study(tmp_path, cfg)
+
+
+def check_occlusion_study(work: Path, cfg: dict) -> None:
+    """The assertions of test_two_by_two_occlusion_study_end_to_end on a finished run in `work`."""
+    from test_cf import cf_errors
+
+    dataset = work / "results/designs/occlusion_mini.nc"
     with xr.open_dataset(dataset, decode_times=False) as ds:
         ds.load()
     print("\n2x2 occlusion study:", {q: ds[q].values.round(12).tolist() for q in (
@@ -323,4 +329,4 @@ def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     assert warnings == 0, [r for r in report["medium_priorities"] if r["msgs"]]
     for kind in ("parameters", "map", "passage"):
         for ext in cfg["figures"]["formats"]:
-            assert (tmp_path / f"results/figures/designs/occlusion_mini_{kind}.{ext}").stat().st_size > 0, kind
+            assert (work / f"results/figures/designs/occlusion_mini_{kind}.{ext}").stat().st_size > 0, kind
