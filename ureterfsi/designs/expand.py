@@ -7,7 +7,8 @@ import itertools
 
 import numpy as np
 
-from ureterfsi.config.checks import check_config, occlusion_unposable
+from ureterfsi.config.checks import check_config
+from ureterfsi.config.occlusion import occlusion_unposable
 from ureterfsi.config.errors import ConfigError, fmt
 from ureterfsi.config.reading import deep_merge
 from ureterfsi.config.sections import mesh_sections, run_sections, wall_sections
