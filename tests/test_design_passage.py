@@ -320,7 +320,11 @@ def check_occlusion_study(work: Path, cfg: dict) -> None:
     assert (ds["peak_pelvic_pressure"].values > bladder).all()
     assert (ds["rung"].values == "fully_coupled").all()
     assert list(ds["reference"].values) == ["unstented", "stented"]
-    assert (ds["reference_peak_pelvic_pressure"].values > bladder).all()
+    # the references: the unstented junction is a valve (its forward drop above the bladder); the stent holds it
+    # open and nothing obstructs, so the pelvis stands at the bladder's pressure; the occlusion raises it above that
+    ref = dict(zip(ds["reference"].values, ds["reference_peak_pelvic_pressure"].values))
+    assert ref["unstented"] > bladder and abs(ref["stented"] - bladder) < 1.0, ref
+    assert (ds["peak_pelvic_pressure"].values > ref["stented"] + 1.0).all()
     for name, var in ds.variables.items():
         assert var.attrs.get("units") and var.attrs.get("long_name"), name
     errors, warnings = cf_errors(dataset)
