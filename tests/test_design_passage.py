@@ -299,7 +299,7 @@ def check_occlusion_study(work: Path, cfg: dict) -> None:
     print("\n2x2 occlusion study:", {q: ds[q].values.round(12).tolist() for q in (
         "obstruction_lumen_fraction", "hole_net_volume", "hole_gross_exchange_volume", "hole_wall_tawss",
         "hole_wall_low_wss_area_fraction", "peak_pelvic_pressure", "stent_lumen_fraction", "wall_time")},
-          {q: ds[q].values.round(12).tolist() for q in ds.variables if q.startswith("reference")})
+          {q: ds[q].values.round(12).tolist() for q in ds.data_vars if q.startswith("reference_")})
     assert ds["obstruction_lumen_fraction"].dims == ("occlusion_position", "hole_pair_rotation")
     assert (ds["obstruction_lumen_fraction"].values > 0.9).all()
     # the initial steady state drains the production (docs/end-conditions.md): what enters passes the occlusion,
