@@ -191,6 +191,26 @@ def flux_volume_forms(pb, inlet: int, outlet: int) -> dict:
             "fluid_volume_rate": J * ufl.tr(ops.grad(w) * ufl.inv(F)) * ops.weight * fluid}
 
 
+def cut_flux_forms(pb, z_cut: float, radius: float, x_axis: float = 0.0) -> tuple[dict, fem.Function]:
+    """UFL forms (3D) of the volumetric flow rate in +z through the plane z = z_cut, consistent with the continuity
+    rows: Q_cut = -int cof F Grad q . (v - w) dX over the fluid, q the P1 pressure-space indicator of the fluid's
+    vertices with z < z_cut (nonzero only on the layer of cells the plane crosses). The continuity rows hold
+    int J tr(Grad v F^-1) q dX = 0, so Q_in = Q_cut + the rate of change of the urine volume upstream, to the
+    solver's tolerance (docs/stricture.md). "cut_flux": all of it; "cut_inside_flux": the part at reference points
+    closer than `radius` to the axis x = x_axis, y = 0 (inside_radius). Returns the forms and q (keep it alive)."""
+    ops, tdim = pb.ops, pb.mesh.topology.dim
+    P, _ = pb.sub("pressure").collapse()
+    dofs = fem.locate_dofs_topological(P, tdim, pb.cells(tuple(pb.fluid_tags)))
+    q = fem.Function(P)
+    q.x.array[dofs[P.tabulate_dof_coordinates()[dofs, 2] < z_cut]] = 1.0
+    u = pb.split()["displacement"]
+    F = physics.deformation_gradient(ops, u)
+    cof = ufl.det(F) * ufl.inv(F).T
+    rel = ops.vec(pb.split()["velocity"]) - ops.vec(pb.split(pb.x_dot)["displacement"])
+    cut, dx = -ufl.dot(cof * ufl.grad(q), rel), pb.dx(tuple(pb.fluid_tags))
+    return {"cut_flux": cut * dx, "cut_inside_flux": inside_radius(pb.mesh, radius, x_axis) * cut * dx}, q
+
+
 def end_face_pressure_forms(pb, inlet: int, outlet: int) -> dict:
     """UFL forms of the area-mean urine pressure on the open ends (facet tags `inlet`, `outlet`),
     p_face = int p |J F^-T N| dA / int |J F^-T N| dA (current area, ALE): "{inlet,outlet}_pressure_integral" and

@@ -118,6 +118,16 @@ class UreterGeometry:
     def occluded(self) -> bool:
         return self.occlusion is not None
 
+    @property
+    def obstruction(self) -> str:
+        """The obstruction's kind: occlusion (complete), stricture (partial) or none."""
+        return "occlusion" if self.occluded else "stricture" if self.strictured else "none"
+
+    @property
+    def obstruction_centre(self) -> float | None:
+        """Axial position of the obstruction's centre (occlusion, else stricture); None without one."""
+        return (self.occlusion.position if self.occluded else self.stricture.position if self.strictured else None)
+
     def radial_shift(self, z):
         """-R_i f b(z): how far the strictured wall (both surfaces) lies inward of the straight one at z;
         Occlusion.radius(z) - R_i under an occlusion."""

@@ -30,8 +30,8 @@ from ..fsi.problem import MonolithicFSI
 from ureterfsi.fsi.wall_shear import ChannelFlux
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION, StentModel, UreterGeometry, hole_pair_axes, hole_pair_positions
 from ureterfsi.data.cf import cf_meta
-from ureterfsi.fsi.probes import (CellField, PointProbe, assemble_scalar, end_face_pressure_forms, flux_volume_forms,
-                      inside_radius, surface_line_points, von_mises)
+from ureterfsi.fsi.probes import (CellField, PointProbe, assemble_scalar, cut_flux_forms, end_face_pressure_forms,
+                                  flux_volume_forms, inside_radius, surface_line_points, von_mises)
 from ureterfsi.data.provenance import provenance_attrs
 from ..scenes.ureter import pulse_centre
 from .options import RunSpec
@@ -87,6 +87,8 @@ class UreterProbes(Observer):
     the mesh); the outer-wall displacement and the stent stress from `wall` and `stent` providers
     (default: read from the coupled state; the one-way rung passes its own, see ureterfsi.study.oneway).
     """
+
+    obstruction_z: float | None = None   # the obstruction's centre (a stented model), where the flow past it is probed
 
     def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times,
                  wall=None, stent=None):
@@ -158,6 +160,13 @@ class UreterProbes(Observer):
             lumen = inside_radius(mesh, g.probe_radius, xs)
             self.forms["outlet_lumen_flux"] = fem.form(lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.OUTLET))
             self.forms["inlet_lumen_flux"] = fem.form(-lumen * ufl.dot(rel, n_da) * ops.weight * ds(tags.INLET))
+            # past the obstruction (a complete occlusion, else a stricture): the flux through its centre's plane and
+            # the stent lumen's part of it (R < mid-wall radius)
+            self.obstruction_z = g.obstruction_centre
+            if self.obstruction_z is not None:
+                cut, self._cut_indicator = cut_flux_forms(pb, self.obstruction_z, g.probe_radius, xs)
+                self.forms |= {"obstruction_flux": fem.form(cut["cut_flux"]),
+                               "obstruction_lumen_flux": fem.form(cut["cut_inside_flux"])}
         self.series = {k: [] for k in self.series_names()}
         self.snapshots = {k: [] for k in self.snapshot_names()}
         self.snapshot_times = []
@@ -169,6 +178,7 @@ class UreterProbes(Observer):
             names += ["stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y",
                       "stent_max_von_mises_z", "hole_flux", "outlet_lumen_flux", "inlet_lumen_flux",
                       "hole_gross_exchange", "stent_outer_wss", "stent_lumen_wss", "hole_wall_wss"]
+            names += ["obstruction_flux", "obstruction_lumen_flux"] if self.obstruction_z is not None else []
         return names
 
     def snapshot_names(self):
@@ -193,6 +203,9 @@ class UreterProbes(Observer):
         if self.has_stent:
             s["outlet_lumen_flux"].append(self.fraction * val["outlet_lumen_flux"])
             s["inlet_lumen_flux"].append(self.fraction * val["inlet_lumen_flux"])
+            for k in ("obstruction_flux", "obstruction_lumen_flux"):
+                if k in val:
+                    s[k].append(self.fraction * val[k])
             self.stent.update(pb)
             vmax, where = self.stent.von_mises.maximum()
             s["stent_max_von_mises"].append(vmax)
@@ -260,6 +273,8 @@ def probes_dataset(obs: UreterProbes, records, cfg: dict, spec: RunSpec, extra_a
         for name, (dims, values) in summary.items():
             ds[name] = _cf(xr.DataArray(values, dims=dims), name)
         ds.attrs["outlet_hole_z"] = obs.outlet_hole_z
+        if obs.obstruction_z is not None:
+            ds.attrs["obstruction_z"] = obs.obstruction_z
     steps = {"step_time": [r.time for r in records], "step_dt": [r.dt for r in records],
              "newton_iterations": [r.newton_iterations for r in records],
              "newton_residual": [r.residual for r in records],
