@@ -128,8 +128,70 @@ def test_field_figures_from_the_field_file(run, tmp_path):
     assert np.isfinite(p_wall).all() and np.isfinite(lines["stent lumen (r = r_i / 2)"][1]).all()
     assert 0.5 * run_dev < dev <= run_dev * (1 + 1e-6)
     centres = [float(ds["pulse_centre"].sel(time=t, method="nearest")) for t in times]
-    for name, fig in (("flow", fig_hole_flow(sec, zh, g, "test")),
+    for name, fig in (("flow", fig_hole_flow(sec, [zh], g, "test")),
                       ("pressure", fig_pressure_along(lines, times, p_ref, centres, "test"))):
         png = tmp_path / f"{name}.png"
         save_figure(fig, [png], dpi=60)
+        assert png.stat().st_size > 10_000
+
+
+def _geometry(**geometry):
+    from ureterfsi.mesh.geometry import UreterGeometry
+
+    cfg = load_config_files([REPO / "config" / "config.yaml"])
+    cfg["geometry"].update(geometry)
+    return UreterGeometry.from_config(cfg)
+
+
+def test_the_field_window_holds_the_obstruction_and_its_nearest_holes():
+    """field_window: around an occlusion (or a stricture) from 1 mm before the nearest hole upstream to 1 mm past
+    the nearest one downstream, every hole in it listed; without one, the outlet-most hole +- 2 mm; clipped to the
+    segment; an obstruction with no hole on a side keeps +- 2 mm on that side."""
+    from ureterfsi.plotting.fields import field_window
+
+    holes = np.array([1.25e-3, 1.25e-3, 10e-3, 10e-3, 20e-3, 20e-3, 48.75e-3, 48.75e-3])
+    w = field_window(holes, _geometry(occlusion_length=1e-3, occlusion_position=0.015, occlusion_taper=1.5e-3))
+    assert (w.lo, w.hi) == pytest.approx((9e-3, 21e-3)) and w.holes == (2, 3, 4, 5)
+    assert "occlusion at z = 15 mm" in w.label and "10, 20 mm" in w.label
+    w = field_window(holes, _geometry(stricture_fraction=0.7, stricture_length=4e-3, stricture_position=0.005))
+    assert (w.lo, w.hi) == pytest.approx((0.25e-3, 11e-3)) and w.holes == (0, 1, 2, 3) and "stricture" in w.label
+    w = field_window(holes[:2], _geometry(occlusion_length=1e-3, occlusion_position=0.03, occlusion_taper=1.5e-3))
+    assert (w.lo, w.hi) == pytest.approx((0.25e-3, 32e-3)) and w.holes == (0, 1)
+    w = field_window(holes, _geometry())
+    assert (w.lo, w.hi) == pytest.approx((46.75e-3, 50e-3)) and w.holes == (6, 7) and "outlet-most" in w.label
+    assert w.centre == pytest.approx(48.375e-3) and w.half_width == pytest.approx(1.625e-3)
+
+
+def test_field_figures_around_an_occlusion_draw_every_hole_of_the_window(tmp_path):
+    """The flow figure over a long window (stacked instants) cuts the stent wall at each in-plane hole and follows
+    the occluded wall; the WSS figure outlines each hole of the window; both are drawn and saved."""
+    from ureterfsi.data.fieldfiles import Section, StentWallShear
+    from ureterfsi.plotting.fields import fig_hole_flow, fig_stent_wall_shear, field_window
+    from ureterfsi.plotting.style import save_figure
+
+    g = _geometry(occlusion_length=1e-3, occlusion_position=0.015, occlusion_taper=1.5e-3)
+    w = field_window(np.array([10e-3, 20e-3]), g)
+    y, z = np.linspace(0.0, g.ureter_inner_radius, 30), np.linspace(w.lo, w.hi, 240)
+    v = np.zeros((y.size, z.size, 3))
+    v[..., 2] = 1e-3 * (1.0 - (y[:, None] / g.ureter_inner_radius) ** 2)
+    fig = fig_hole_flow(Section(y, z, [0.5, 1.0], [v, 2 * v]), [10e-3, 20e-3], g, "test")
+    from matplotlib.patches import Rectangle
+
+    axes = fig.axes[:2]
+    walls = [[p for p in ax.patches if isinstance(p, Rectangle)] for ax in axes]
+    assert [len(w_) for w_ in walls] == [3, 3]                  # wall pieces before, between and after the holes
+    edges = sorted(e for p in walls[0] for e in (p.get_x(), p.get_x() + p.get_width()))
+    rh = g.hole_radius * 1e3
+    assert edges[1:5] == pytest.approx([10 - rh, 10 + rh, 20 - rh, 20 + rh])
+    wall = axes[0].lines[-1].get_ydata()
+    assert wall.min() == pytest.approx(g.stent_outer_radius * 1e3, rel=1e-6)   # the wall on the stent
+    rng = np.random.default_rng(0)
+    n = 500
+    ws = StentWallShear(rng.uniform(-np.pi, np.pi, n), rng.uniform(w.lo, w.hi, n),
+                        np.full(n, g.stent_outer_radius), [0.5], [rng.uniform(1e-3, 1.0, n)])
+    fig2 = fig_stent_wall_shear(ws, [(90.0, 10e-3), (90.0, 20e-3)], g, 0.04, "test")
+    assert len([p for p in fig2.axes[0].patches if isinstance(p, Rectangle)]) == 2
+    for name, f in (("flow", fig), ("wss", fig2)):
+        png = tmp_path / f"{name}.png"
+        save_figure(f, [png], dpi=60)
         assert png.stat().st_size > 10_000

@@ -1,6 +1,9 @@
-"""Figures from the run's field files (read by ureterfsi.data.fieldfiles): the flow at a side hole, the wall shear
-stress on the stent around it, the pressure along the segment."""
+"""Figures from the run's field files (read by ureterfsi.data.fieldfiles): the flow through the side holes of a
+window of the segment, the wall shear stress on the stent there, the pressure along the segment. The window
+(field_window) holds the obstruction and the nearest hole on each side of it, or the outlet-most side hole."""
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from matplotlib.colors import LogNorm
@@ -10,32 +13,83 @@ from ureterfsi.data.fieldfiles import Section, StentWallShear
 from ureterfsi.plotting.style import plt, styled
 
 
+@dataclass(frozen=True)
+class FieldWindow:
+    """The axial window lo <= z <= hi (m) a field figure shows, the side holes in it (indices into the run's hole
+    arrays) and the words of the figure's title."""
+    lo: float
+    hi: float
+    holes: tuple
+    label: str
+
+    @property
+    def centre(self) -> float:
+        return 0.5 * (self.lo + self.hi)
+
+    @property
+    def half_width(self) -> float:
+        return 0.5 * (self.hi - self.lo)
+
+
+def field_window(hole_z, geom, margin: float = 1.0e-3, half_width: float = 2.0e-3) -> FieldWindow:
+    """Around the obstruction (geom.obstruction_centre z_c): from the nearest hole upstream of z_c less `margin` to
+    the nearest hole downstream plus `margin` (z_c -+ half_width on a side without a hole), where urine enters and
+    leaves the stent past it; without an obstruction, the outlet-most side hole +- half_width (Figs. 6-9).
+    Clipped to the segment."""
+    hole_z = np.asarray(hole_z, dtype=float)
+    zc = geom.obstruction_centre
+    if zc is None:
+        zh = float(hole_z.max())
+        lo, hi = zh - half_width, zh + half_width
+        label = f"around the outlet-most side hole (z = {zh * 1e3:g} mm)"
+    else:
+        up, down = hole_z[hole_z < zc], hole_z[hole_z > zc]
+        lo = float(up.max()) - margin if up.size else zc - half_width
+        hi = float(down.min()) + margin if down.size else zc + half_width
+        label = f"around the {geom.obstruction} at z = {zc * 1e3:g} mm"
+    lo, hi = max(lo, 0.0), min(hi, geom.length)
+    holes = tuple(int(k) for k in np.flatnonzero((hole_z >= lo) & (hole_z <= hi)))
+    shown = sorted({round(float(hole_z[k]) * 1e3, 6) for k in holes})
+    if zc is not None:
+        label += f" (side holes at {', '.join(f'{z:g}' for z in shown)} mm)" if shown else " (no side hole near it)"
+    return FieldWindow(lo, hi, holes, label)
+
+
 @styled
-def fig_hole_flow(sec: Section, hole_z: float, geom, title: str):
+def fig_hole_flow(sec: Section, hole_zs, geom, title: str):
     """The Section of hole_flow_section: urine speed |v| (colour, one scale for every instant) and streamlines
-    of the in-plane velocity (v_y, v_z); the stent wall (grey) with the hole, and the ureter inner wall at rest
-    (dashed) outlined."""
-    fig, axes = plt.subplots(1, len(sec.times), figsize=(3.2 * len(sec.times) + 1.0, 4.2), sharey=True,
-                             constrained_layout=True)
+    of the in-plane velocity (v_y, v_z); the stent wall (grey) cut by the plane's side holes at `hole_zs` (m), and
+    the ureter's inner wall at rest (dashed; narrowed by a stricture or an occlusion) outlined. A window longer than
+    6 mm stacks the instants."""
+    zmm, ymm = sec.z * 1e3, sec.y * 1e3
+    zl, zh = zmm[0], zmm[-1]
+    wide = zh - zl > 6.0
+    n = len(sec.times)
+    fig, axes = plt.subplots(n if wide else 1, 1 if wide else n, sharex=wide, sharey=True, constrained_layout=True,
+                             figsize=(10.0, 1.7 * n + 1.0) if wide else (3.2 * n + 1.0, 4.2))
     axes = np.atleast_1d(axes)
     vmax = max(float(np.nanmax(np.linalg.norm(v, axis=2))) for v in sec.values) * 1e3
-    zmm, ymm = sec.z * 1e3, sec.y * 1e3
     ri, ro, rh = geom.stent_inner_radius * 1e3, geom.stent_outer_radius * 1e3, geom.hole_radius * 1e3
-    zl, zh = zmm[0], zmm[-1]
+    edges = [zl, *[e for z in sorted(np.asarray(hole_zs, float) * 1e3) for e in (z - rh, z + rh)], zh]
+    wall_z = np.linspace(zl, zh, 400)
     for ax, t, v in zip(axes, sec.times, sec.values):
         speed = np.linalg.norm(v, axis=2) * 1e3
         im = ax.pcolormesh(zmm, ymm, speed, shading="auto", cmap="viridis", vmin=0.0, vmax=vmax)
         vy, vz = np.ma.masked_invalid(v[..., 1]), np.ma.masked_invalid(v[..., 2])
         ax.streamplot(zmm, ymm, vz, vy, color="w", density=1.1, linewidth=0.6, arrowsize=0.7)
-        for a, b in ((zl, hole_z * 1e3 - rh), (hole_z * 1e3 + rh, zh)):
-            ax.add_patch(Rectangle((a, ri), b - a, ro - ri, facecolor="0.6", edgecolor="k", lw=0.8))
-        ax.axhline(geom.ureter_inner_radius * 1e3, color="k", ls="--", lw=0.8)
+        for a, b in zip(edges[::2], edges[1::2]):
+            if b > a:
+                ax.add_patch(Rectangle((a, ri), b - a, ro - ri, facecolor="0.6", edgecolor="k", lw=0.8))
+        ax.plot(wall_z, geom.inner_radius(wall_z * 1e-3) * 1e3, color="k", ls="--", lw=0.8)
         ax.set_title(f"t = {t:g} s")
-        ax.set_xlabel("z (mm)")
         ax.set_xlim(zl, zh)
         ax.set_ylim(ymm[0], ymm[-1])
         ax.set_facecolor("0.85")
-    axes[0].set_ylabel("y (mm), plane x = 0")
+        if not wide:
+            ax.set_xlabel("z (mm)")
+    axes[-1].set_xlabel("z (mm)")
+    for ax in axes if wide else axes[:1]:
+        ax.set_ylabel("y (mm), plane x = 0")
     fig.colorbar(im, ax=axes, label="urine speed |v| (mm s$^{-1}$)")
     fig.suptitle(title)
     return fig
@@ -65,10 +119,10 @@ def hole_angle(axis: int, side: float) -> float:
 
 
 @styled
-def fig_stent_wall_shear(ws: StentWallShear, hole_z: float, hole_angles, geom, threshold: float, title: str):
+def fig_stent_wall_shear(ws: StentWallShear, holes, geom, threshold: float, title: str):
     """The StentWallShear unrolled onto (angle, z), one column per instant: the outer surface with the holes'
     channels (top row) and the lumen (bottom row); log colour scale, the low-WSS threshold marked on the colour
-    bar; the outlines of the holes at `hole_angles` (deg; r_h / r_o wide in angle) dashed."""
+    bar; the outlines of the `holes`, (angle (deg), z (m)) pairs, r_h / r_o wide in angle, dashed."""
     rows = {"outer surface and hole walls": ws.radius > geom.stent_inner_radius,
             "lumen": ws.radius <= geom.stent_inner_radius}
     fig, axes = plt.subplots(2, len(ws.times), figsize=(3.0 * len(ws.times) + 1.2, 5.6), sharex=True, sharey=True,
@@ -81,10 +135,10 @@ def fig_stent_wall_shear(ws: StentWallShear, hole_z: float, hole_angles, geom, t
             ax = axes[i, j]
             sc = ax.scatter(deg[sel], zmm[sel], c=np.maximum(v[sel], norm.vmin), s=6, cmap="viridis", norm=norm,
                             linewidths=0)
-            for axis_angle in hole_angles:
+            for axis_angle, hz in holes:
                 half = np.degrees(geom.hole_radius / geom.stent_outer_radius)
-                ax.add_patch(Rectangle((axis_angle - half, hole_z * 1e3 - geom.hole_radius * 1e3), 2 * half,
-                                           2 * geom.hole_radius * 1e3, fill=False, ls="--", lw=0.8, ec="k"))
+                ax.add_patch(Rectangle((axis_angle - half, hz * 1e3 - geom.hole_radius * 1e3), 2 * half,
+                                       2 * geom.hole_radius * 1e3, fill=False, ls="--", lw=0.8, ec="k"))
             ax.set_title(f"t = {t:g} s" if i == 0 else "")
             if j == 0:
                 ax.set_ylabel(f"z (mm)\n{label}")

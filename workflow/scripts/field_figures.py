@@ -25,20 +25,18 @@ def draw(rule: str):
     what = (f"model {run.attrs['model']} ({model['label']} between hole pairs), {run.attrs['fidelity']}, "
             f"{run.attrs['symmetry']}, mesh {run.attrs['mesh_level']}")
     times = [float(t) for t in smk.params.times]
+    win = plotting_fields.field_window(run["hole_z"].values, geom)
     if rule == "field_hole_flow":
-        hole_z = float(run["hole_z"].max())
-        sec = fieldfiles.hole_flow_section(fs, times, hole_z, geom)
-        return plotting_fields.fig_hole_flow(sec, hole_z, geom, f"Urine flow at the outlet-most side hole "
-                                                                f"(z = {hole_z * 1e3:g} mm)\n{what}")
+        z = np.linspace(win.lo, win.hi, max(120, int(round((win.hi - win.lo) / 5.0e-5)) + 1))
+        sec = fieldfiles.hole_flow_section(fs, times, win.centre, geom, z=z)
+        in_plane = [float(run["hole_z"].values[k]) for k in win.holes if int(run["hole_axis"].values[k]) == 1]
+        return plotting_fields.fig_hole_flow(sec, in_plane, geom, f"Urine flow {win.label}\n{what}")
     if rule == "field_stent_wss":
-        hole_z = float(run["hole_z"].max())
-        ws = fieldfiles.stent_wall_shear(fs, times, hole_z, geom)
-        at = np.isclose(run["hole_z"].values, hole_z)
-        angles = [plotting_fields.hole_angle(int(a), float(s))
-                  for a, s in zip(run["hole_axis"].values[at], run["hole_side"].values[at])]
-        return plotting_fields.fig_stent_wall_shear(ws, hole_z, angles, geom, float(run["low_wss_threshold"]),
-                                                    f"Wall shear stress on the stent around the outlet-most side hole "
-                                                    f"(z = {hole_z * 1e3:g} mm)\n{what}")
+        ws = fieldfiles.stent_wall_shear(fs, times, win.centre, geom, half_width=win.half_width)
+        holes = [(plotting_fields.hole_angle(int(run["hole_axis"].values[k]), float(run["hole_side"].values[k])),
+                  float(run["hole_z"].values[k])) for k in win.holes]
+        return plotting_fields.fig_stent_wall_shear(ws, holes, geom, float(run["low_wss_threshold"]),
+                                                    f"Wall shear stress on the stent {win.label}\n{what}")
     if rule == "field_pressure":
         lines = fieldfiles.pressure_lines(fs, times, geom)
         centres = [float(run["pulse_centre"].sel(time=t, method="nearest")) for t in times]
