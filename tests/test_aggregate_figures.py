@@ -52,6 +52,7 @@ class _SyntheticProbes:
 
     series_names = UreterProbes.series_names
     snapshot_names = UreterProbes.snapshot_names
+    obstruction_z = UreterProbes.obstruction_z          # unobstructed: no flow past an obstruction recorded
 
     def __init__(self, cfg, model, symmetry, times, level_factor=1.0):
         g = UreterGeometry.from_config(cfg)

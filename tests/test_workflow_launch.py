@@ -1,6 +1,6 @@
 """ureterfsi.workflow.launch: the one command line of every solve rule (solve, ladder_run, design_solve,
-design_corner_solve), each rule's command built through it and read back by the study's own parser; and a scan
-that refuses a rule file or workflow script that builds or runs a solve itself."""
+design_escalated_solve, design_corner_solve), each rule's command built through it and read back by the study's
+own parser; and a scan that refuses a rule file or workflow script that builds or runs a solve itself."""
 import json
 import re
 import shlex
@@ -11,11 +11,12 @@ import pytest
 from ureterfsi.config import load_config_files, run_config
 from ureterfsi.designs import jobs as design_jobs
 from ureterfsi.designs.expand import studies
+from ureterfsi.designs.rung_check import reference_config
 from ureterfsi.study.cli import parser
 from ureterfsi.workflow import launch, paths
 
 REPO = Path(__file__).resolve().parent.parent
-SOLVING_RULES = ("solve", "ladder_run", "design_solve", "design_corner_solve")
+SOLVING_RULES = ("solve", "ladder_run", "design_solve", "design_escalated_solve", "design_corner_solve")
 MPI = {"tasks": 4, "mpi": "mpiexec", "mumps_out_of_core": 1}
 
 
@@ -83,6 +84,39 @@ def test_design_point_and_corner_commands(design):
         assert (args.wall is None) == (rung == "fully_coupled")
         assert run == (["mpiexec", "-n", "4", "py"] if rung == "fully_coupled" else ["py"])
         assert args.out_of_core == 1
+
+
+def test_reference_and_escalated_commands():
+    """A reference run on its own model and rung (stricture_holes: the unstented model 1 fully coupled r-z, the
+    stented model 3 one-way) and an escalated point (fully coupled on the reference scheme), through the launcher."""
+    cfg = load_config_files([REPO / "config/config.yaml", REPO / "config/designs/stricture_holes.yaml"])
+    st = studies(cfg)["stricture_holes"]
+
+    def command_of(solve, inputs, out):
+        job = launch.SolveJob(**solve, mesh=inputs["mesh"], out=out, checkpoint="c.npz", wall=inputs.get("wall"))
+        return parsed(launch.command(job, MPI, python="py"))
+
+    for ref in st.references:
+        run, args = command_of(design_jobs.point_solve(st, ref.id), design_jobs.point_inputs(st, ref.id),
+                               paths.design_run(st.name, ref.id))
+        assert (args.model, args.fidelity, args.symmetry) == (ref.model, ref.rung, ref.symmetry)
+        assert (args.wall is None) == (ref.rung == "fully_coupled") and not args.record_failure
+        assert run == ["py"]                              # r-z fully coupled and 3D one-way: serial
+        assert run_config(json.loads(args.run_sections), args.model)["models"] == {ref.model: ref.config["models"][
+            ref.model]}
+    assert {r.model for r in st.references} == {"1", "3"}
+    p = st.points[0]
+    assert p.rung == "one_way"
+    run, args = command_of(design_jobs.escalated_solve(st, p.id), design_jobs.escalated_inputs(st, p.id),
+                           paths.escalated_run(st.name, p.id))
+    assert (args.model, args.fidelity, args.wall, args.record_failure) == (st.model, "fully_coupled", None, False)
+    assert args.name == f"design point stricture_holes/{p.id} (escalated)"
+    assert run == ["mpiexec", "-n", "4", "py"] and args.out == paths.escalated_run(st.name, p.id)
+    cfg_run = run_config(json.loads(args.run_sections), args.model)
+    assert cfg_run["solver"] == reference_config(p.config)["solver"] and cfg_run["ends"] == p.config["ends"]
+    trigger = json.loads(design_jobs.solve_trigger(design_jobs.escalated_solve(st, p.id)))
+    assert trigger["rung"] == "fully_coupled" != json.loads(design_jobs.solve_trigger(
+        design_jobs.point_solve(st, p.id)))["rung"]
 
 
 def rule_blocks(text: str) -> dict:

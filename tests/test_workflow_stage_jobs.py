@@ -3,12 +3,15 @@ cluster cap of a rule's resource (ureterfsi.workflow.cluster): plain functions, 
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
 from ureterfsi.config import load_config_files
+from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.designs import jobs as design_jobs
 from ureterfsi.designs.expand import studies
+from ureterfsi.designs.passage import escalated_points
 from ureterfsi.stability import cases
 from ureterfsi.stability import jobs as stability_jobs
 from ureterfsi.workflow import paths
@@ -61,6 +64,34 @@ def test_design_meshes_walls_inputs_and_figures(cfg, tmp_path):
     assert design_jobs.rung_check_caption(path).startswith("measured when")
     xr.Dataset(attrs={"rung_check": "within 0.05"}).to_netcdf(path)
     assert design_jobs.rung_check_caption(path) == "within 0.05"
+
+
+def test_design_references_and_escalation(tmp_path):
+    """stricture_holes: its references' meshes on their own models, every run asked up front, and the dataset's runs
+    once the rung check is made: the escalated points' fully coupled runs in place of their one-way ones."""
+    cfg = load_config_files([REPO / "config/config.yaml", REPO / "config/designs/stricture_holes.yaml"])
+    st = studies(cfg)["stricture_holes"]
+    meshes = design_jobs.meshes({st.name: st})
+    unstented = next(r for r in st.references if r.name == "unstented")
+    assert json.loads(design_jobs.mesh_trigger(*meshes[unstented.mesh_id]))["model"] == cfg["models"]["1"]
+    one_way = [p.id for p in st.points + st.references if p.rung == "one_way"]
+    assert set(design_jobs.walls({st.name: st})) == {p.wall_id for p in st.points + st.references if p.wall_id}
+    assert len(one_way) == len(st.points) + 1
+    assert design_jobs.escalates(st)
+    ids = [p.id for p in st.points + st.references]
+    assert design_jobs.runs(st) == [paths.design_run(st.name, i) for i in ids]
+    assert design_jobs.dataset_inputs(st)["runs"] == design_jobs.runs(st)       # before the check is made
+    ok = np.ones(len(st.check.corners), np.int8)
+    ok[0] = 0
+    check = tmp_path / "rung_check.nc"
+    attrs = {FORMAT_VERSION_ATTR: FORMAT_VERSION}
+    xr.Dataset({"corner_within_tolerance": ("corner", ok)}, attrs=attrs).to_netcdf(check)
+    escalated = escalated_points(st, ok)
+    assert 0 < len(escalated) < len(st.points)
+    runs = design_jobs.dataset_inputs(st, check)
+    assert runs["check"] == paths.rung_check(st.name)
+    assert runs["runs"] == [paths.escalated_run(st.name, i) if i in escalated else paths.design_run(st.name, i)
+                            for i in ids]
 
 
 def test_cluster_cap_of_a_resource():

@@ -25,7 +25,7 @@ from ureterfsi.data.provenance import atomic_path
 from ureterfsi.data.cf_tables import (DESIGN_PARAMETERS, FIELD_VARIABLES, GCI_VARIABLES, LADDER_VARIABLES,
                                      RUNG_CHECK_VARIABLES, STANDARD_NAMES, VARIABLES, WALL_MOTION_VARIABLES, at_time,
                                      at_z, gci_quantity_variables, gci_variables, ladder_variables,
-                                     rung_check_metadata)
+                                     reference_metadata, rung_check_metadata)
 
 CONVENTIONS = "CF-1.8"
 INSTITUTION = "ureterfsi project (open reproduction)"
@@ -39,7 +39,8 @@ __all__ = [
     "LADDER_VARIABLES", "REFERENCES", "RUNG_CHECK_VARIABLES", "SOURCE", "STANDARD_NAMES", "VARIABLES",
     "WALL_MOTION_VARIABLES", "annotate", "at_time", "at_z", "attach", "cf_attrs", "cf_meta",
     "check_dimension_order", "encoding", "gci_quantity_variables", "gci_variables", "global_attrs", "history_entry",
-    "ladder_variables", "rung_check_metadata", "snakemake_version", "standard_names", "write_netcdf",
+    "ladder_variables", "reference_metadata", "rung_check_metadata", "snakemake_version", "standard_names",
+    "write_netcdf",
 ]
 
 # calendar of the time coordinate (CF §4.4.1); its epoch in VARIABLES["time"] is a stand-in for t = 0

@@ -57,6 +57,19 @@ VARIABLES = {
                                         "the stent lumen since t = 0 (time integral of the reversed inflow)"),
     "annulus_reflux_volume": ("m3", "volume of urine moved toward the kidney through the kidney end face outside the "
                                     "stent (the whole lumen without a stent) since t = 0"),
+    "obstruction_flux": ("m3 s-1", "volumetric flow rate in +z through the plane of the obstruction's centre (the flux "
+                                   "through the layer of cells it crosses, consistent with the continuity rows)"),
+    "obstruction_lumen_flux": ("m3 s-1", "part of obstruction_flux inside the stent (closer than the stent's mid-wall "
+                                         "radius to its axis)"),
+    "obstruction_lumen_fraction": ("1", "share of the flow past the obstruction's centre inside the stent, integral "
+                                        "|Q_lumen| dt over integral |Q_lumen| dt + integral |Q - Q_lumen| dt"),
+    "obstruction": ("1", "kind of obstruction of the design point: occlusion (complete), stricture (partial) or none"),
+    "obstruction_position": ("m", "axial position of the obstruction's centre (NaN: none)"),
+    "hole_proximal": ("1", "1 for a side hole upstream (kidney side) of the obstruction's centre, 0 downstream, NaN "
+                           "without an obstruction"),
+    "rung": ("1", "fidelity rung that solved the design point (one_way, or fully_coupled where escalated)"),
+    "reference": ("1", "name of a reference run of the design study (design_studies.<study>.references)"),
+    "reference_model": ("1", "stent model number of the reference run (paper Table 1)"),
     "stent_lumen_fraction": ("1", "share of the outlet flow passing inside the stent, integral |Q_out,lumen| dt over "
                                   "integral |Q_out,lumen| dt + integral |Q_out - Q_out,lumen| dt"),
     "wall_radial_displacement": ("m", "radial displacement of the ureter outer wall along the wall probe line "
@@ -232,6 +245,8 @@ DESIGN_PARAMETERS = {
     "stricture_position": ("m", "axial position of the stricture centre"),
     "hole_pair_rotation": ("degree", "angle between the axes of successive side-hole pairs"),
     "stent_eccentricity": ("m", "offset of the stent axis from the ureter axis, along x"),
+    "occlusion_position": ("m", "axial position of the complete occlusion's centre"),
+    "occlusion_length": ("m", "axial length over which a complete occlusion lies on the stent (0: none)"),
 }
 # the rung check of a design study at the corners of its design space (ureterfsi.designs.rung_check); the corners'
 # parameter coordinates come from rung_check_metadata
@@ -251,6 +266,12 @@ RUNG_CHECK_VARIABLES = {
     "rung_trusted": ("1", "1 if the design point lies in the checked region and every corner is within the "
                           "tolerance, else 0"),
 }
+
+
+def reference_metadata(names) -> dict:
+    """(units, long_name) of the reference runs' scalars of a design dataset (reference_<name> on the reference
+    dimension), from VARIABLES."""
+    return {f"reference_{k}": (VARIABLES[k][0], f"{VARIABLES[k][1]}, of the reference run") for k in names}
 
 
 def rung_check_metadata(parameters) -> dict:

@@ -8,7 +8,9 @@ import itertools
 import numpy as np
 
 from ureterfsi.config.checks import check_config
+from ureterfsi.config.occlusion import occlusion_unposable
 from ureterfsi.config.errors import ConfigError, fmt
+from ureterfsi.config.reading import deep_merge
 from ureterfsi.config.sections import mesh_sections, run_sections, wall_sections
 from ureterfsi.designs import rung_check as rc
 from ureterfsi.designs.space import (ARRANGEMENT, CONFIG_KEYS, FRENCH, FRENCH_RANGE, PARAMETERS, Point,
@@ -38,6 +40,33 @@ def _unit_sample(method: str, dim: int, size: int, seed: int) -> np.ndarray:
 def _parameter_key(name: str, spec: dict, param: str) -> str:
     return (f"design_studies.{name}.grid.parameters.{param}" if "grid" in spec
             else f"design_studies.{name}.sample.bounds.{param}")
+
+
+def study_config(cfg: dict, spec: dict) -> dict:
+    """The configuration a study's points, corners and references start from: `cfg` (without design_studies) with
+    the study's `base` overlay (e.g. its end conditions, its occlusion) merged on top."""
+    return deep_merge({k: v for k, v in cfg.items() if k != "design_studies"}, spec.get("base") or {})
+
+
+def on_rung(cfg: dict, model: str, rung: str) -> dict:
+    """`cfg` with its study runs on `rung` (study.fidelity, and `model`'s study.runs override): the configuration
+    checks that refuse a scene on the one-way rung (an occlusion, end pressures) see the rung the point is solved on."""
+    cfg["study"]["fidelity"] = rung
+    if "fidelity" in cfg["study"]["runs"].get(model, {}):
+        cfg["study"]["runs"][model]["fidelity"] = rung
+    return cfg
+
+
+def _checked(cfg: dict, model: str, key: str, what: str) -> None:
+    """check_config(cfg) and the occlusion's posability on `model`; ConfigError naming `key`, `what` (it cannot be
+    posed ...) and why."""
+    try:
+        check_config(cfg)
+    except ConfigError as err:
+        raise ConfigError(key, f"{what}: {err.key}: {err.constraint}") from None
+    why = occlusion_unposable(cfg, model)
+    if why:
+        raise ConfigError(key, f"{what}: {why}")
 
 
 def _check_study(cfg: dict, name: str, spec: dict) -> None:
@@ -142,6 +171,12 @@ def expand_study(cfg: dict, name: str) -> Study:
     spec = cfg["design_studies"][name]
     _check_study(cfg, name, spec)
     model = spec["model"]
+    if spec.get("base"):
+        try:
+            cfg = on_rung(study_config(cfg, spec), model, spec.get("rung") or run_rung(cfg, model)[0])
+            check_config(cfg)
+        except ConfigError as err:
+            raise ConfigError(f"design_studies.{name}.base", f"{err.key}: {err.constraint}") from None
     fidelity, base_symmetry = run_rung(cfg, model)
     rung = spec.get("rung") or fidelity
     base = base_values(cfg, model)
@@ -158,18 +193,53 @@ def expand_study(cfg: dict, name: str) -> Study:
         bad = _precheck(cfg, model, values)
         if bad:
             raise ConfigError(_parameter_key(name, spec, bad[0]), f"point {pid} ({_values_text(values)}): {bad[1]}")
-        pcfg = apply(cfg, model, values)
+        pcfg = on_rung(apply(cfg, model, values), model, rung)
         pcfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", pcfg["solver"]["one_way_mesh_motion"])
         try:
             check_config(pcfg)
         except ConfigError as err:
             raise ConfigError(_parameter_key(name, spec, _blame(values, err)),
                               f"point {pid} ({_values_text(values)}) cannot be posed: {err.key}: {err.constraint}") from None
+        why = occlusion_unposable(pcfg, model)
+        if why:
+            blamed = next((q for q in ("occlusion_position", "occlusion_length") if q in values), next(iter(values)))
+            raise ConfigError(_parameter_key(name, spec, blamed),
+                              f"point {pid} ({_values_text(values)}) cannot be posed: {why}")
         symmetry = point_symmetry(pcfg, base_symmetry)
         study.points.append(Point(pid, values, pcfg, _short_hash(mesh_sections(pcfg, model, spec["level"], symmetry)),
-                                  _short_hash(wall_sections(pcfg)) if rung == "one_way" else None, symmetry))
+                                  _short_hash(wall_sections(pcfg)) if rung == "one_way" else None, symmetry,
+                                  model, rung))
     study.check = expand_rung_check(cfg, name, spec, study)
+    study.references = expand_references(cfg, name, spec, study)
     return study
+
+
+def expand_references(cfg: dict, name: str, spec: dict, study: Study) -> list:
+    """The study's reference runs (design_studies.<study>.references: each a named overlay on the study's
+    configuration, on its own model and rung; e.g. the unstented and the stented unobstructed segment under the
+    study's end conditions), each a Point named by the hash of its entry."""
+    out = []
+    for i, ref in enumerate(spec.get("references") or []):
+        key = f"design_studies.{name}.references.{i}"
+        model = ref.get("model", study.model)
+        if model not in cfg["models"]:
+            raise ConfigError(f"{key}.model", f"must be one of models {sorted(cfg['models'], key=int)}, "
+                                              f"got {fmt(model)}")
+        fidelity, base_symmetry = run_rung(cfg, model)
+        rung = ref.get("rung", study.rung)
+        rcfg = on_rung(deep_merge(cfg, ref.get("overlay") or {}), model, rung)
+        _checked(rcfg, model, key, f"reference {ref['name']} (model {model}) cannot be posed")
+        symmetry = point_symmetry(rcfg, base_symmetry)
+        if rung == "one_way" and symmetry == "axisymmetric":
+            raise ConfigError(f"{key}.rung", f"one_way needs a 3D mesh; model {model} runs {symmetry}")
+        out.append(Point(_short_hash({"reference": ref}), {}, rcfg,
+                         _short_hash(mesh_sections(rcfg, model, study.level, symmetry)),
+                         _short_hash(wall_sections(rcfg)) if rung == "one_way" else None, symmetry, model, rung,
+                         ref["name"]))
+    names = [r.name for r in out]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"design_studies.{name}.references", f"names must be distinct, got {names}")
+    return out
 
 
 def _space(spec: dict, names: list, all_values: list) -> tuple[dict, dict]:
@@ -200,24 +270,22 @@ def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungChe
         raise ConfigError(f"{key}.segment", err.constraint) from None
     seg = rc.segment_config(cfg, overlay)
     check = RungCheck(mode, float(opts["tolerance"]), opts["segment"], rc.on_segment(cfg, overlay), low, high,
-                      rc.centre(low, high, study.base))
+                      rc.centre(low, high, study.base), opts["on_failure"])
     base_symmetry = run_rung(cfg, study.model)[1]
     for values in rc.corner_values(mode, low, high, study.base):
         values = {p: _round(v) for p, v in values.items()}
         cid = point_id(values)
-        ccfg = apply(seg, study.model, values)
+        ccfg = on_rung(apply(seg, study.model, values), study.model, study.rung)
         ccfg["solver"]["one_way_mesh_motion"] = spec.get("one_way_mesh_motion", ccfg["solver"]["one_way_mesh_motion"])
-        try:
-            check_config(ccfg)
-        except ConfigError as err:
-            raise ConfigError(key, f"corner {cid} ({_values_text(values)}) cannot be posed on the segment "
-                                   f"{opts['segment']}: {err.key}: {err.constraint}") from None
+        _checked(ccfg, study.model, key,
+                 f"corner {cid} ({_values_text(values)}) cannot be posed on the segment {opts['segment']}")
         symmetry = point_symmetry(ccfg, base_symmetry)
         if symmetry == "axisymmetric":
             raise ConfigError(key, f"the fully coupled reference of corner {cid} needs a 3D mesh; model "
                                    f"{study.model} runs axisymmetric")
         corner = Point(cid, values, ccfg, _short_hash(mesh_sections(ccfg, study.model, study.level, symmetry)),
-                       _short_hash(wall_sections(ccfg)) if study.rung == "one_way" else None, symmetry)
+                       _short_hash(wall_sections(ccfg)) if study.rung == "one_way" else None, symmetry, study.model,
+                       study.rung)
         check.corners.append(corner)
         same = next((p for p in study.points if p.id == cid), None)
         if same is not None and (same.mesh_id, same.symmetry) == (corner.mesh_id, corner.symmetry) and \
@@ -262,23 +330,24 @@ def check_design_studies(cfg: dict) -> None:
     studies(cfg)
 
 
-def _points_and_corners(st: Study) -> list:
-    return st.points + (st.check.corners if st.check else [])
+def points_and_corners(st: Study) -> list:
+    """Every Point of a study that needs a mesh: its points, its references and its rung check's corners."""
+    return st.points + st.references + (st.check.corners if st.check else [])
 
 
 def mesh_request(cfg: dict, mesh_id: str) -> tuple[dict, str, str, str]:
     """(configuration, model, level, symmetry) of a design mesh, from the first point (or corner) that uses it."""
     for st in studies(cfg).values():
-        for p in _points_and_corners(st):
+        for p in points_and_corners(st):
             if p.mesh_id == mesh_id:
-                return p.config, st.model, st.level, p.symmetry
+                return p.config, p.model, st.level, p.symmetry
     raise KeyError(f"no design point uses mesh {mesh_id}")
 
 
 def wall_config(cfg: dict, wall_id: str) -> dict:
     """Configuration of a design wall motion, from the first point (or corner) that uses it."""
     for st in studies(cfg).values():
-        for p in _points_and_corners(st):
+        for p in points_and_corners(st):
             if p.wall_id == wall_id:
                 return p.config
     raise KeyError(f"no design point uses wall motion {wall_id}")
@@ -286,8 +355,12 @@ def wall_config(cfg: dict, wall_id: str) -> dict:
 
 def design_figure_kinds(st: Study) -> list:
     """The figures of a study: parameters; a map for a full-factorial grid over two or more parameters with two or
-    more values; sensitivity for a sample."""
+    more values; sensitivity for a sample; passage (per hole against its position) for a study of the whole passage:
+    a stented one with a complete occlusion or reference runs."""
+    passage = (bool(st.references) or any(p.config["geometry"]["occlusion_length"] > 0 for p in st.points)) and \
+        st.points[0].config["models"][st.model]["stent"]
     return (["parameters"] + (["map"] if len(map_parameters(st.grid)) >= 2 else [])
-            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else []))
+            + (["sensitivity"] if st.kind in ("sobol", "latin_hypercube", "saltelli") else [])
+            + (["passage"] if passage else []))
 
 

@@ -1,38 +1,39 @@
 """What the design rules (workflow/rules/designs.smk) ask of the expanded studies, as plain functions: the shared
 meshes and wall motions by id, each job's inputs and configuration (its rerun trigger), the rung a solve runs on
 (its memory reservation and out-of-core factorisation), what its solve command is given
-(ureterfsi.workflow.launch.SolveJob) and a study's figures."""
+(ureterfsi.workflow.launch.SolveJob: a point or reference run on its own model and rung, a corner on the study's
+rung or fully coupled, an escalated point fully coupled), the dataset's runs (escalated ones once the rung check
+is made) and a study's figures."""
 from __future__ import annotations
 
 import json
 
 from ureterfsi.config.sections import mesh_sections, run_sections
 from ureterfsi.designs import expand
+from ureterfsi.designs.passage import escalated_from_file
+from ureterfsi.designs.rung_check import REFERENCE_RUNG, reference_config
 from ureterfsi.designs.space import Point, Study
 from ureterfsi.workflow import paths
 
 
-def _points(st: Study) -> list[Point]:
-    return st.points + (st.check.corners if st.check else [])
-
-
 def meshes(designs: dict) -> dict:
-    """{mesh id: (study, point)} of every point and corner of the studies (a mesh shared by several: one of them)."""
-    return {p.mesh_id: (st, p) for st in designs.values() for p in _points(st)}
+    """{mesh id: (study, point)} of every point, reference and corner of the studies (a mesh shared by several: one
+    of them)."""
+    return {p.mesh_id: (st, p) for st in designs.values() for p in expand.points_and_corners(st)}
 
 
 def walls(designs: dict) -> dict:
-    """{wall id: point} of every point and corner on the one-way rung (their shared r-z wall motions)."""
-    return {p.wall_id: p for st in designs.values() for p in _points(st) if p.wall_id}
+    """{wall id: point} of every point, reference and corner on the one-way rung (their shared r-z wall motions)."""
+    return {p.wall_id: p for st in designs.values() for p in expand.points_and_corners(st) if p.wall_id}
 
 
 def mesh_trigger(st: Study, p: Point) -> str:
-    """The configuration entering a design mesh (rule design_mesh's rerun trigger)."""
-    return json.dumps(mesh_sections(p.config, st.model, st.level, p.symmetry), sort_keys=True)
+    """The configuration entering a design mesh (rule design_mesh's rerun trigger), on the model it solves."""
+    return json.dumps(mesh_sections(p.config, p.model, st.level, p.symmetry), sort_keys=True)
 
 
 def point_inputs(st: Study, point_id: str) -> dict:
-    """A point's mesh, and on the one-way rung its wall motion."""
+    """A point's (or reference run's) mesh, and on the one-way rung its wall motion."""
     p = st.point(point_id)
     out = {"mesh": paths.design_mesh(p.mesh_id)}
     if p.wall_id:
@@ -49,17 +50,31 @@ def corner_inputs(st: Study, corner_id: str, rung: str) -> dict:
     return out
 
 
+def escalated_inputs(st: Study, point_id: str) -> dict:
+    """An escalated point's mesh (its fully coupled solve moves its own wall)."""
+    return {"mesh": paths.design_mesh(st.point(point_id).mesh_id)}
+
+
 def _solve(st: Study, p: Point, cfg: dict, rung: str, name: str, record_failure: bool) -> dict:
-    return {"fidelity": rung, "symmetry": p.symmetry, "model": st.model, "level": st.level,
-            "sections": json.dumps(run_sections(cfg, st.model), sort_keys=True), "name": name,
+    return {"fidelity": rung, "symmetry": p.symmetry, "model": p.model, "level": st.level,
+            "sections": json.dumps(run_sections(cfg, p.model), sort_keys=True), "name": name,
             "record_failure": record_failure}
 
 
 def point_solve(st: Study, point_id: str) -> dict:
-    """What a point's solve command is given (the fields of ureterfsi.workflow.launch.SolveJob but its files):
-    the study's rung and level, the point's symmetry and configuration; a failure fails the job, naming the point."""
+    """What a point's (or reference run's) solve command is given (the fields of ureterfsi.workflow.launch.SolveJob
+    but its files): its model, rung, symmetry and configuration, the study's level; a failure fails the job, naming
+    the point."""
     p = st.point(point_id)
-    return _solve(st, p, p.config, st.rung, f"design point {st.name}/{p.id}", False)
+    return _solve(st, p, p.config, p.rung, f"design point {st.name}/{p.id}", False)
+
+
+def escalated_solve(st: Study, point_id: str) -> dict:
+    """The same of a point escalated by the rung check (rung_check.on_failure: escalate): fully coupled
+    (rung_check.REFERENCE_RUNG) on its configuration with the reference scheme (rung_check.reference_config)."""
+    p = st.point(point_id)
+    name = f"design point {st.name}/{p.id} (escalated)"
+    return _solve(st, p, reference_config(p.config), REFERENCE_RUNG, name, False)
 
 
 def corner_solve(st: Study, corner_id: str, rung: str) -> dict:
@@ -71,7 +86,8 @@ def corner_solve(st: Study, corner_id: str, rung: str) -> dict:
 
 
 def solve_trigger(solve: dict) -> str:
-    """The configuration entering a point's or corner's solve, with its rung and symmetry (rerun trigger)."""
+    """The configuration entering a point's, reference's, escalated point's or corner's solve, with its rung and
+    symmetry (rerun trigger)."""
     sections = json.loads(solve["sections"])
     return json.dumps(sections | {"rung": solve["fidelity"], "symmetry": solve["symmetry"]}, sort_keys=True)
 
@@ -81,9 +97,23 @@ def rung(solve: dict) -> tuple[str, str, str]:
     return solve["fidelity"], solve["symmetry"], solve["level"]
 
 
-def dataset_inputs(st: Study) -> dict:
-    """The study's point runs, and for a checked study its rung check (rule design_rung_check)."""
-    out = {"runs": [paths.design_run(st.name, p.id) for p in st.points]}
+def escalates(st: Study) -> bool:
+    """Whether the study's dataset waits for its rung check to know its runs (rung_check.on_failure: escalate)."""
+    return bool(st.check) and st.check.on_failure == "escalate"
+
+
+def runs(st: Study) -> list[str]:
+    """The run files of the study's points and reference runs on their own rungs."""
+    return [paths.design_run(st.name, p.id) for p in st.points + st.references]
+
+
+def dataset_inputs(st: Study, check_file=None) -> dict:
+    """The study's point and reference runs, and for a checked study its rung check (checkpoint design_rung_check);
+    given the made check's file (a study that escalates), the escalated points' fully coupled runs in place of
+    theirs (passage.escalated_from_file)."""
+    escalated = escalated_from_file(st, check_file) if check_file is not None else []
+    out = {"runs": [paths.escalated_run(st.name, p.id) if p.id in escalated else paths.design_run(st.name, p.id)
+                    for p in st.points + st.references]}
     if st.check:
         out["check"] = paths.rung_check(st.name)
     return out

@@ -16,8 +16,10 @@ from ureterfsi.designs import rung_check as rc
 from ureterfsi.data.checked import Contract, open_netcdf
 from ureterfsi.designs.expand import studies
 from ureterfsi.designs.space import Study, base_values, point_id
+from ureterfsi.designs.passage import (OBSTRUCTION_SERIES, escalated_points, obstruction_lumen_fraction,
+                                       obstruction_variables, reference_variables, rung_variable)
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
-from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, rung_check_metadata
+from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, reference_metadata, rung_check_metadata
 from ureterfsi.data.provenance import provenance_attrs
 
 # the stent's wall shear stress and the holes' gross exchange, copied from a run file (ureterfsi.study.stent_surface):
@@ -30,13 +32,15 @@ PER_HOLE = ("peak_hole_flux", "hole_exchange_volume") + HOLE_SURFACE
 END_CONDITIONS = ("peak_pelvic_pressure", "reflux_volume_lumen", "reflux_volume_annulus")
 SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "peak_hole_flux", "hole_exchange_volume",
            "hole_exchange_fraction", "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement",
-           "wall_time", "peak_pressure_drop", "mean_pressure_drop") + STENT_SURFACE + HOLE_SURFACE + END_CONDITIONS
+           "wall_time", "peak_pressure_drop", "mean_pressure_drop", "obstruction_lumen_fraction") + STENT_SURFACE + (
+    HOLE_SURFACE + END_CONDITIONS)
 QUANTITIES = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", "hole_exchange_fraction",   # figures, indices
-              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop")
+              "stent_lumen_fraction", "peak_stent_von_mises", "peak_wall_displacement", "peak_pressure_drop",
+              "peak_pelvic_pressure", "obstruction_lumen_fraction")     # NaN with open ends / without an obstruction
 SOBOL_INDICES = {"sobol_first_order": "S1", "sobol_first_order_conf": "S1_conf",   # dataset name: SALib's key
                  "sobol_total": "ST", "sobol_total_conf": "ST_conf"}
 SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises", "max_wall_displacement",
-          "pressure_drop")
+          "pressure_drop") + OBSTRUCTION_SERIES
 
 
 def _trapz(y: np.ndarray, t: np.ndarray) -> float:
@@ -98,7 +102,7 @@ def point_scalars(run) -> dict:
             "peak_hole_flux": np.abs(hole).max(axis=1) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
             "hole_exchange_fraction": float(np.sum(mirror * exchange)) / _trapz(np.abs(q), t),
-            "stent_lumen_fraction": lumen_fraction,
+            "stent_lumen_fraction": lumen_fraction, "obstruction_lumen_fraction": obstruction_lumen_fraction(run),
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
             "wall_time": float(run.attrs.get("wall_time_s", np.nan))} | pressure_drop_scalars(run) | {
@@ -139,6 +143,11 @@ def _corner_run(path) -> xr.Dataset:
     return ds if "solve_failed" in ds.attrs else open_netcdf(path, DESIGN_RUN)
 
 
+def _scheme(st: Study) -> str:
+    """The fully coupled scheme of the study's corner solves (ureterfsi.designs.rung_check.reference_scheme)."""
+    return rc.reference_scheme(st.check.corners[0].config) if st.check.corners else rc.REFERENCE_SCHEME
+
+
 def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed: dict | None = None) -> str:
     """One paragraph on the study's rung check (the dataset's attribute rung_check, the figures' captions): what
     was checked, the largest error against the tolerance, the corners beyond it, those whose solve failed
@@ -151,7 +160,7 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed
                 f"these designs is not measured")
     where = "the study's own segment" if ch.on_segment else f"the segment {ch.segment}"
     worst = float(np.nanmax(error)) if np.isfinite(error).any() else np.nan
-    text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME}) at {len(ch.corners)} corners "
+    text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({_scheme(st)}) at {len(ch.corners)} corners "
             f"({ch.mode}) of the design space on {where}: largest relative error {worst:.2g} "
             f"(tolerance {ch.tolerance:g})")
     failed = failed or {}
@@ -218,7 +227,7 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     attrs = {"rung_check": rung_check_summary(st, error, None, failed), "rung_check_corners": ch.mode,
              "rung_check_tolerance": ch.tolerance, "rung_check_segment": ch.segment,
              "rung_check_max_error": float(np.nanmax(error)) if np.isfinite(error).any() else np.nan,
-             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
+             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({_scheme(st)})",
              "rung_check_reused_points": ch.reuses, "rung_check_failed_corners": failed,
              "rung_check_corners_beyond_tolerance": [c.id for c, k in zip(ch.corners, corner_ok) if not k]}
     ds.attrs.update(provenance_attrs(cfg, study=name, model=st.model, mesh_level=st.level,
@@ -257,6 +266,7 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
     region and whether it is trusted there (see the module docstring and ureterfsi.designs.rung_check)."""
     st = studies(cfg)[name]
     runs = {p.id: open_netcdf(paths[p.id], DESIGN_RUN) for p in st.points}
+    references = {r.id: point_scalars(open_netcdf(paths[r.id], DESIGN_RUN)) for r in st.references}
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())
@@ -287,14 +297,21 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
     check_part, check_attrs, inside, trusted = _rung_check_part(st, check)
     vars_["in_rung_check_region"] = (("design",), inside)
     vars_["rung_trusted"] = (("design",), trusted)
+    escalated = escalated_points(st, check["corner_within_tolerance"].values) if check is not None else []
+    vars_ |= rung_variable(st, escalated)
+    passage, passage_coords = obstruction_variables(st.points, hole_z)
+    vars_ |= passage
     coords = {"design": ("design", [p.id for p in st.points]), "time": ("time", t), "hole": ("hole", np.arange(n_hole)),
               "hole_z": (("design", "hole"), hole_z), "hole_side": (("design", "hole"), hole_side),
-              "hole_axis": (("design", "hole"), hole_axis)}
+              "hole_axis": (("design", "hole"), hole_axis)} | passage_coords
     coords |= {q: ("design", [p.values[q] for p in st.points]) for q in st.parameters}
     ds = xr.Dataset(vars_, coords=coords)
     if check_part is not None:
         ds = ds.merge(check_part)
-    meta = VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters} | rung_check_metadata(st.parameters)
+    ref_vars, ref_coords = reference_variables(st, references)
+    ds = ds.assign(ref_vars).assign_coords(ref_coords)
+    meta = (VARIABLES | {q: DESIGN_PARAMETERS[q] for q in st.parameters} | rung_check_metadata(st.parameters)
+            | reference_metadata(q.removeprefix("reference_") for q in ref_vars))
     if st.kind == "full_factorial":
         if len(st.parameters) == 1:   # one parameter: a plain index, nothing to unstack
             ds = ds.swap_dims(design=st.parameters[0]).drop_vars("design")
@@ -311,10 +328,12 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
         if k in meta:
             ds[k].attrs.update(units=meta[k][0], long_name=meta[k][1])
     ds.attrs.update(provenance_attrs(cfg, study=name, design_kind=st.kind, model=st.model, mesh_level=st.level,
-                                     rung=st.rung, point_symmetry={p.id: p.symmetry for p in st.points},
+                                     rung=st.rung, escalated_points=escalated,
+                                     point_symmetry={p.id: p.symmetry for p in st.points},
                                      base_values=st.base,
                                      points={p.id: p.values for p in st.points},
-                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points}))
+                                     point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points},
+                                     references={r.name: r.id for r in st.references}))
     ds.attrs.update({k: v if isinstance(v, (int, float, str)) else json.dumps(v) for k, v in check_attrs.items()})
     ds.attrs["Conventions"] = "CF-1.8"
     ds.attrs["title"] = f"ureterfsi design study {name}: model {st.model}, {st.kind}, {len(st.points)} points"

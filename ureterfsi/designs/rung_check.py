@@ -46,9 +46,11 @@ from ureterfsi import REPO_ROOT
 
 CORNER_MODES = ("auto", "all", "axes", "none")
 ALL_CORNERS_UP_TO = 3                  # varied parameters below which (inclusive) auto takes every corner
-DEFAULTS = {"corners": "auto", "tolerance": 0.05, "segment": "config/segment-10mm.yaml"}
+DEFAULTS = {"corners": "auto", "tolerance": 0.05, "segment": "config/segment-10mm.yaml", "on_failure": "report"}
+ON_FAILURE = ("report", "escalate")
 REFERENCE_RUNG = "fully_coupled"
 REFERENCE_SCHEME = "partitioned"       # solver.fully_coupled_scheme of the reference solves (3D: docs/performance.md)
+LUMPED_ENDS_SCHEME = "monolithic"      # ... under end conditions other than open (the partitioned sweeps refuse them)
 # sections of the segment overlay a corner takes: the geometry (its length), the load's start and ramp, the time
 # window and the figures' instants (which must be its probe times); not its models (each keeps its spacing, its
 # hole count follows the segment's length) nor its study section (but its convergence_time, inside its window)
@@ -152,11 +154,34 @@ def segment_config(cfg: dict, overlay: dict) -> dict:
     return out
 
 
+def reference_scheme(cfg: dict) -> str:
+    """The fully coupled scheme of a reference (or escalated) solve: partitioned with both ends open, else monolithic
+    (the partitioned sweeps do not carry the end conditions, docs/end-conditions.md)."""
+    ends = cfg.get("ends") or {}
+    lumped = any((ends.get(e) or {}).get("condition", "open") != "open" for e in ("kidney", "bladder"))
+    return LUMPED_ENDS_SCHEME if lumped else REFERENCE_SCHEME
+
+
 def reference_config(cfg: dict) -> dict:
-    """A corner's configuration for its fully coupled solve (the partitioned scheme)."""
+    """A corner's (or an escalated point's) configuration for its fully coupled solve (reference_scheme)."""
     out = copy.deepcopy(cfg)
-    out["solver"]["fully_coupled_scheme"] = REFERENCE_SCHEME
+    out["solver"]["fully_coupled_scheme"] = reference_scheme(cfg)
     return out
+
+
+def nearest_corners(values: dict, corners: list[dict], lo: dict, hi: dict) -> list[int]:
+    """Indices of the corners nearest a point: Euclidean distance with each varied parameter scaled by its range
+    (hi - lo; a parameter with one value does not count); every corner at the smallest distance (to round-off)."""
+    varied = [p for p in lo if hi[p] > lo[p]]
+    d = np.array([math.sqrt(sum(((values[p] - c[p]) / (hi[p] - lo[p])) ** 2 for p in varied)) for c in corners])
+    return [int(i) for i in np.flatnonzero(d <= d.min() + 1e-9)]
+
+
+def escalated(points: list[dict], corners: list[dict], failing: list[bool], lo: dict, hi: dict) -> list[bool]:
+    """Per point, whether it is solved fully coupled under `on_failure: escalate`: its region is the points whose
+    nearest corner (nearest_corners) it is, and a point is escalated when any of its nearest corners failed the check
+    (beyond the tolerance, or not solved)."""
+    return [any(failing[i] for i in nearest_corners(v, corners, lo, hi)) for v in points]
 
 
 def relative_errors(rung: dict, reference: dict, quantities, scales: dict | None = None) -> np.ndarray:

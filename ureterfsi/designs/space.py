@@ -75,12 +75,14 @@ class Parameter:
 
 # the parameters (units and long_name: ureterfsi.data.cf.DESIGN_PARAMETERS) and what each re-runs;
 # stricture_* (geometry.stricture_*): a new wall motion and a new mesh; hole_pair_rotation
-# (geometry.hole_arrangement, 0 = aligned, 90 = rotated_90) and stent_eccentricity (geometry.stent_offset): a new mesh
+# (geometry.hole_arrangement, 0 = aligned, 90 = rotated_90) and stent_eccentricity (geometry.stent_offset): a new mesh;
+# occlusion_position, occlusion_length (geometry.occlusion_*, a complete occlusion; length 0 = none): a new mesh and wall
 PARAMETERS = {name: Parameter(name, part) for name, part in (
     ("hole_diameter", "stent"), ("hole_pair_spacing", "stent"), ("stent_outer_diameter", "stent"),
     ("stent_wall_thickness", "stent"), ("stent_youngs_modulus", "solve"), ("wall_stiffness_scale", "wall"),
     ("peak_traction", "wall"), ("pulse_speed", "wall"), ("stricture_fraction", "wall"), ("stricture_length", "wall"),
-    ("stricture_position", "wall"), ("hole_pair_rotation", "stent"), ("stent_eccentricity", "stent"))}
+    ("stricture_position", "wall"), ("hole_pair_rotation", "stent"), ("stent_eccentricity", "stent"),
+    ("occlusion_position", "wall"), ("occlusion_length", "wall"))}
 ARRANGEMENT = {0.0: "aligned", 90.0: "rotated_90"}     # hole_pair_rotation -> geometry.hole_arrangement
 STRICTURE = ("stricture_fraction", "stricture_length", "stricture_position")
 MOONEY_RIVLIN = ("c10", "c01", "c20", "c02", "c11")
@@ -99,6 +101,8 @@ CONFIG_KEYS = {
     "stricture_position": ("geometry.stricture_position",),
     "hole_pair_rotation": ("geometry.hole_arrangement",),
     "stent_eccentricity": ("geometry.stent_offset",),
+    "occlusion_position": ("geometry.occlusion_position", "geometry.occlusion_length"),
+    "occlusion_length": ("geometry.occlusion_length", "geometry.occlusion_position"),
 }
 
 
@@ -110,6 +114,9 @@ class Point:
     mesh_id: str
     wall_id: str | None                # None on the fully coupled rung (no separate wall solve)
     symmetry: str                      # from the point's geometry (point_symmetry)
+    model: str = ""                    # the model it solves: the study's, or a reference's own
+    rung: str = ""                     # the rung it is solved on: the study's, or fully coupled where escalated
+    name: str = ""                     # a reference run's name (design_studies.<study>.references)
 
 
 @dataclass
@@ -123,6 +130,7 @@ class RungCheck:
     low: dict                          # parameter -> minimum of the design space
     high: dict                         # parameter -> maximum
     centre: dict                       # parameter -> the axes corners' centre
+    on_failure: str = "report"         # report | escalate: the points nearest a failing corner solved fully coupled
     corners: list = field(default_factory=list)   # Point per corner (its configuration on the segment)
     reuses: dict = field(default_factory=dict)    # corner id -> the study point whose run is the corner's rung run
 
@@ -149,9 +157,11 @@ class Study:
     points: list = field(default_factory=list)
     rows: list = field(default_factory=list)   # saltelli: the point id of each sample row, in SALib's order
     check: "RungCheck | None" = None           # the rung check at the corners (None: not checked)
+    references: list = field(default_factory=list)   # Point per reference run (design_studies.<study>.references)
 
     def point(self, point_id: str) -> Point:
-        for p in self.points:
+        """A design point or a reference run by its id."""
+        for p in self.points + self.references:
             if p.id == point_id:
                 return p
         raise KeyError(f"design study {self.name} has no point {point_id}")
@@ -186,7 +196,9 @@ def base_values(cfg: dict, model: str) -> dict:
             "stent_youngs_modulus": cfg["stent"]["youngs_modulus"], "wall_stiffness_scale": 1.0,
             "peak_traction": cfg["peristalsis"]["peak_traction"], "pulse_speed": cfg["peristalsis"]["speed"],
             "hole_pair_rotation": {v: k for k, v in ARRANGEMENT.items()}[g["hole_arrangement"]],
-            "stent_eccentricity": g["stent_offset"]} | {p: g[p] for p in STRICTURE}
+            "stent_eccentricity": g["stent_offset"], "occlusion_position": g["occlusion_position"],
+            "occlusion_length": g["occlusion_length"]} | {
+        p: g[p] for p in STRICTURE}
 
 
 def apply(cfg: dict, model: str, values: dict) -> dict:
@@ -221,6 +233,7 @@ def apply(cfg: dict, model: str, values: dict) -> dict:
         g["hole_arrangement"] = ARRANGEMENT[values["hole_pair_rotation"]]
     if "stent_eccentricity" in values:
         g["stent_offset"] = values["stent_eccentricity"]
+    g.update({p: values[p] for p in ("occlusion_position", "occlusion_length") if p in values})
     return out
 
 

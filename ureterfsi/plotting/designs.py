@@ -124,3 +124,42 @@ def sensitivity_figure(ds: xr.Dataset):
         ax.set_title(f"{q.replace('_', ' ')}\nR² = {r2:.2f}")
         ax.set_xlabel("SRC")
     return fig
+
+
+PASSAGE = ("hole_net_volume", "hole_gross_exchange_volume", "hole_wall_tawss", "hole_wall_low_wss_area_fraction")
+
+
+@styled
+def passage_figure(ds: xr.Dataset):
+    """Per side hole against its axial position (ureterfsi.designs.passage): the net volume out of the stent, the
+    gross exchange, TAWSS and the low-WSS area fraction of its wall (rows); one column per value of the study's
+    first parameter, one line per point (its other parameters in the legend); filled markers upstream of the
+    obstruction, open ones downstream, the obstruction's centre dashed; the references' holes in grey."""
+    params, flat = (list(ds["point_id"].dims) if "point_id" in ds else _parameters(ds)), _flat(ds)
+    first = params[0]
+    values = list(dict.fromkeys(np.asarray(flat[first].values, float).tolist()))
+    fig, axes = plt.subplots(len(PASSAGE), len(values), figsize=(3.4 * len(values) + 1.0, 2.1 * len(PASSAGE)),
+                             squeeze=False, sharex=True, constrained_layout=True)
+    for k in range(flat.sizes["point"]):
+        pt = flat.isel(point=k)
+        j = values.index(float(pt[first]))
+        z = np.asarray(pt["hole_z"].values, float) * 1e3
+        up = np.asarray(pt["hole_proximal"].values, float) == 1
+        label = ", ".join(f"{_label(p)} {float(pt[p]):g}" for p in params[1:]) or None
+        for i, q in enumerate(PASSAGE):
+            ax, y = axes[i, j], np.asarray(pt[q].values, float)
+            order = np.argsort(z)
+            line, = ax.plot(z[order], y[order], "-", lw=0.8, label=label if i == 0 else None)
+            ax.plot(z[up], y[up], "o", ms=4, color=line.get_color())
+            ax.plot(z[~up], y[~up], "o", ms=4, mfc="none", color=line.get_color())
+            if np.isfinite(float(pt["obstruction_position"])):
+                ax.axvline(float(pt["obstruction_position"]) * 1e3, ls="--", lw=0.6, color=line.get_color())
+    for j, v in enumerate(values):
+        axes[0, j].set_title(f"{_label(first)} = {v:g} {PARAMETERS[first].units}", fontsize=8)
+        axes[-1, j].set_xlabel("hole position z [mm]")
+        if len(params) > 1:
+            axes[0, j].legend(fontsize=6)
+    for i, q in enumerate(PASSAGE):
+        axes[i, 0].set_ylabel(f"{_label(q)}\n[{ds[q].attrs['units']}]", fontsize=8)
+    fig.suptitle(ds.attrs.get("title", "") + "\nfilled: upstream of the obstruction; open: downstream", fontsize=9)
+    return fig

@@ -88,6 +88,8 @@ class UreterProbes(Observer):
     (default: read from the coupled state; the one-way rung passes its own, see ureterfsi.study.oneway).
     """
 
+    obstruction_z: float | None = None   # the obstruction's centre (a stented model), where the flow past it is probed
+
     def __init__(self, pb: MonolithicFSI, cfg: dict, model: StentModel, symmetry: str, probe_times,
                  wall=None, stent=None):
         self.pb, self.cfg, self.symmetry = pb, cfg, symmetry

@@ -1,9 +1,9 @@
 """The one command line of every solve job of the workflow (rules solve, ladder_run, design_solve,
-design_corner_solve): `python -m ureterfsi.study` with the run's arguments, behind the MPI launcher for several
-tasks (resources.launcher), with the job's out-of-core factorisation and checkpoint, its output into the rule's
-log. The rules describe their solve (SolveJob) and take the command from here, so that no option of one rule's
-solve drifts from another's (tests/test_workflow_launch.py builds every rule's command and refuses a rule that
-spells its own)."""
+design_escalated_solve, design_corner_solve): `python -m ureterfsi.study` with the run's arguments, behind the MPI
+launcher for several tasks (resources.launcher), with the job's out-of-core factorisation and checkpoint, its
+output into the rule's log. The rules describe their solve (SolveJob) and take the command from here, so that no
+option of one rule's solve drifts from another's (tests/test_workflow_launch.py builds every rule's command and
+refuses a rule that spells its own)."""
 from __future__ import annotations
 
 import shlex
@@ -17,10 +17,11 @@ STUDY = "ureterfsi.study"   # the module every solve job runs (ureterfsi.study.c
 
 @dataclass(frozen=True)
 class SolveJob:
-    """What one solve job runs: its rung, mesh symmetry and level, files, and the options it sets. `run_config`
-    is the file of the solve's configuration sections (rule solve_config), `sections` the same inline (JSON text:
-    a design point's or corner's own configuration); `name` the run a failure names; `record_failure`: a failed
-    solve writes a run file holding its failure instead of failing the job (a rung-check corner)."""
+    """What one solve job runs: its rung, model, mesh symmetry and level, files, and the options it sets.
+    `run_config` is the file of the solve's configuration sections (rule solve_config), `sections` the same inline
+    (JSON text: a design point's, reference run's, escalated point's or corner's own configuration on its model);
+    `name` the run a failure names; `record_failure`: a failed solve writes a run file holding its failure instead
+    of failing the job (a rung-check corner)."""
     fidelity: str
     symmetry: str
     model: str

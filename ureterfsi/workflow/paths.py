@@ -85,6 +85,11 @@ def design_run(study=_w("design_study"), point=_w("point")) -> str:
     return f"{DESIGNS}/{study}/{point}/run.nc"
 
 
+def escalated_run(study=_w("design_study"), point=_w("point")) -> str:
+    """A design point's fully coupled run file, where its study's rung check escalated it."""
+    return f"{DESIGNS}/{study}/{point}/fully_coupled.nc"
+
+
 def corner_run(study=_w("design_study"), corner=_w("corner"), rung=_w("corner_rung")) -> str:
     """A rung-check corner's run file on one rung."""
     return f"{DESIGNS}/{study}/rung_check/{corner}/{rung}.nc"

@@ -31,6 +31,11 @@ def design_solve_inputs(w):
     return design_jobs.point_inputs(DESIGNS[w.design_study], w.point)
 
 
+def design_escalated_inputs(w):
+    """An escalated point's mesh (design_jobs.escalated_inputs)."""
+    return design_jobs.escalated_inputs(DESIGNS[w.design_study], w.point)
+
+
 def design_corner_inputs(w):
     """A corner's mesh and wall motion (design_jobs.corner_inputs)."""
     return design_jobs.corner_inputs(DESIGNS[w.design_study], w.corner, w.corner_rung)
@@ -42,8 +47,14 @@ def design_corner_runs(w):
 
 
 def design_dataset_inputs(w):
-    """A study's point runs and rung check (design_jobs.dataset_inputs)."""
-    return design_jobs.dataset_inputs(DESIGNS[w.design_study])
+    """A study's point and reference runs and rung check (design_jobs.dataset_inputs); for a study that escalates,
+    once checkpoint design_rung_check is made, the escalated points' fully coupled runs.
+    """
+    st = DESIGNS[w.design_study]
+    made = None
+    if design_jobs.escalates(st):
+        made = checkpoints.design_rung_check.get(design_study=st.name).output[0]
+    return design_jobs.dataset_inputs(st, made)
 
 
 def design_rung_check_caption(wildcards, input):
@@ -58,6 +69,11 @@ def point_solve(w):
     return design_jobs.point_solve(DESIGNS[w.design_study], w.point)
 
 
+def escalated_solve(w):
+    """What an escalated design point's solve is given (design_jobs.escalated_solve)."""
+    return design_jobs.escalated_solve(DESIGNS[w.design_study], w.point)
+
+
 def corner_solve(w):
     """What a rung-check corner's solve is given (design_jobs.corner_solve)."""
     return design_jobs.corner_solve(DESIGNS[w.design_study], w.corner, w.corner_rung)
@@ -66,6 +82,11 @@ def corner_solve(w):
 def point_rung(w):
     """(fidelity, symmetry, level) of a design point's solve."""
     return design_jobs.rung(point_solve(w))
+
+
+def escalated_rung(w):
+    """(fidelity, symmetry, level) of an escalated design point's solve."""
+    return design_jobs.rung(escalated_solve(w))
 
 
 def corner_rung(w):
@@ -83,6 +104,12 @@ def point_job(w, input, output):
     """A design point's solve."""
     name = f"designs/{w.design_study}/{w.point}"
     return design_job(point_solve(w), name, input, output)
+
+
+def escalated_job(w, input, output):
+    """An escalated design point's solve."""
+    name = f"designs/{w.design_study}/{w.point}_fully_coupled"
+    return design_job(escalated_solve(w), name, input, output)
 
 
 def corner_job(w, input, output):

@@ -1,10 +1,12 @@
 # Design studies (config `design_studies`, ureterfsi.designs.space): every point its own chain of jobs.
 # Meshes and wall motions are content-addressed (shared by every point with the same geometry / wall). The
 # rules (their paths: ureterfsi.workflow.paths): design_mesh, design_wall_motion (one-way rung), design_solve
-# (a point), design_corner_solve (a corner of the design space on the segment, on the study's rung and fully
-# coupled, ureterfsi.designs.rung_check; a corner that is a point of a study on the segment reuses the point's
-# run), design_rung_check (the rung error per corner and quantity), design_dataset, and the figures
-# (design_figures, design_map, design_sensitivity).
+# (a point or a reference run), design_corner_solve (a corner of the design space on the segment, on the study's
+# rung and fully coupled, ureterfsi.designs.rung_check; a corner that is a point of a study on the segment reuses
+# the point's run), the checkpoint design_rung_check (the rung error per corner and quantity; under
+# rung_check.on_failure: escalate, design_dataset's input function reads it and asks design_escalated_solve for
+# the points nearest a failing corner), design_dataset, and the figures (design_figures, design_map,
+# design_sensitivity, design_passage).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 # Their inputs, rerun triggers and solves: ureterfsi.designs.jobs; the solve command: common.smk's solve_command.
 
@@ -78,6 +80,33 @@ if DESIGNS:
         shell:
             launch.SHELL
 
+    rule design_escalated_solve:
+        input:
+            unpack(design_escalated_inputs),
+        output:
+            paths.escalated_run(),
+        log:
+            paths.log("designs/{design_study}/{point}_fully_coupled"),
+        benchmark:
+            paths.benchmark("designs/{design_study}/{point}_fully_coupled")
+        threads: 1
+        resources:
+            tasks=1,
+            mpi=solve_mpi(escalated_rung),
+            mem_mb=solve_mem_mb_of(
+                escalated_rung,
+                lambda w: paths.escalated_run(w.design_study, w.point),
+            ),
+            runtime=24 * 60,
+            mumps_out_of_core=out_of_core(escalated_rung),
+        params:
+            # rerun triggers (the command is not one: a function of resources)
+            study=lambda w: design_jobs.solve_trigger(escalated_solve(w)),
+            checkpoint=paths.checkpoint("designs/{design_study}/{point}_fully_coupled"),
+            solve=solve_command(escalated_job),
+        shell:
+            launch.SHELL
+
     rule design_corner_solve:
         input:
             unpack(design_corner_inputs),
@@ -107,7 +136,7 @@ if DESIGNS:
         shell:
             launch.SHELL
 
-    rule design_rung_check:
+    checkpoint design_rung_check:
         input:
             design_corner_runs,
         output:
@@ -168,6 +197,19 @@ if DESIGNS:
         script:
             "../scripts/design_figures.py"
 
+    rule design_passage:
+        input:
+            paths.design_dataset(),
+        output:
+            design_figure_outputs("passage"),
+        log:
+            paths.log("designs/{design_study}_passage"),
+        params:
+            dpi=FIGURE_OPTIONS["dpi"],
+            rung_check=design_rung_check_caption,
+        script:
+            "../scripts/design_figures.py"
+
     for _study in DESIGNS:
 
         rule:
@@ -176,6 +218,8 @@ if DESIGNS:
             input:
                 paths.design_dataset(_study),
                 design_figures(_study),
+                # every point's run up front: under escalate the dataset's inputs wait for the rung check
+                design_jobs.runs(DESIGNS[_study]),
 
         if DESIGNS[_study].check:
 
