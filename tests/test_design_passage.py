@@ -62,8 +62,8 @@ def test_shipped_whole_passage_studies_expand_on_the_50_mm_segment():
     st = studies(shipped("stricture_holes"))["stricture_holes"]
     ch = st.check
     assert ch.on_segment and ch.on_failure == "escalate" and len(ch.corners) == 8 and len(ch.reuses) == 8
-    # the corners' fully coupled solves carry the ends: the monolithic scheme (the partitioned sweeps refuse them)
-    assert {rc.reference_config(c.config)["solver"]["fully_coupled_scheme"] for c in ch.corners} == {"monolithic"}
+    # the corners' fully coupled solves carry the ends on the partitioned sweeps
+    assert {rc.reference_config(c.config)["solver"]["fully_coupled_scheme"] for c in ch.corners} == {"partitioned"}
     assert [r.rung for r in st.references] == ["fully_coupled", "one_way"]
     void = studies(shipped("voiding_reflux"))["voiding_reflux"]
     assert {p.config["ends"]["bladder"]["detrusor_pressure"] for p in void.points} == {4903.0}

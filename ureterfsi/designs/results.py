@@ -143,11 +143,6 @@ def _corner_run(path) -> xr.Dataset:
     return ds if "solve_failed" in ds.attrs else open_netcdf(path, DESIGN_RUN)
 
 
-def _scheme(st: Study) -> str:
-    """The fully coupled scheme of the study's corner solves (ureterfsi.designs.rung_check.reference_scheme)."""
-    return rc.reference_scheme(st.check.corners[0].config) if st.check.corners else rc.REFERENCE_SCHEME
-
-
 def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed: dict | None = None) -> str:
     """One paragraph on the study's rung check (the dataset's attribute rung_check, the figures' captions): what
     was checked, the largest error against the tolerance, the corners beyond it, those whose solve failed
@@ -160,7 +155,7 @@ def rung_check_summary(st: Study, error: np.ndarray, inside: list | None, failed
                 f"these designs is not measured")
     where = "the study's own segment" if ch.on_segment else f"the segment {ch.segment}"
     worst = float(np.nanmax(error)) if np.isfinite(error).any() else np.nan
-    text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({_scheme(st)}) at {len(ch.corners)} corners "
+    text = (f"{st.rung} checked against {rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME}) at {len(ch.corners)} corners "
             f"({ch.mode}) of the design space on {where}: largest relative error {worst:.2g} "
             f"(tolerance {ch.tolerance:g})")
     failed = failed or {}
@@ -227,7 +222,7 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     attrs = {"rung_check": rung_check_summary(st, error, None, failed), "rung_check_corners": ch.mode,
              "rung_check_tolerance": ch.tolerance, "rung_check_segment": ch.segment,
              "rung_check_max_error": float(np.nanmax(error)) if np.isfinite(error).any() else np.nan,
-             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({_scheme(st)})",
+             "rung_check_rung": st.rung, "rung_check_reference": f"{rc.REFERENCE_RUNG} ({rc.REFERENCE_SCHEME})",
              "rung_check_reused_points": ch.reuses, "rung_check_failed_corners": failed,
              "rung_check_corners_beyond_tolerance": [c.id for c, k in zip(ch.corners, corner_ok) if not k]}
     ds.attrs.update(provenance_attrs(cfg, study=name, model=st.model, mesh_level=st.level,

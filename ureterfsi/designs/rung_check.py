@@ -50,7 +50,6 @@ DEFAULTS = {"corners": "auto", "tolerance": 0.05, "segment": "config/segment-10m
 ON_FAILURE = ("report", "escalate")
 REFERENCE_RUNG = "fully_coupled"
 REFERENCE_SCHEME = "partitioned"       # solver.fully_coupled_scheme of the reference solves (3D: docs/performance.md)
-LUMPED_ENDS_SCHEME = "monolithic"      # ... under end conditions other than open (the partitioned sweeps refuse them)
 # sections of the segment overlay a corner takes: the geometry (its length), the load's start and ramp, the time
 # window and the figures' instants (which must be its probe times); not its models (each keeps its spacing, its
 # hole count follows the segment's length) nor its study section (but its convergence_time, inside its window)
@@ -154,18 +153,11 @@ def segment_config(cfg: dict, overlay: dict) -> dict:
     return out
 
 
-def reference_scheme(cfg: dict) -> str:
-    """The fully coupled scheme of a reference (or escalated) solve: partitioned with both ends open, else monolithic
-    (the partitioned sweeps do not carry the end conditions, docs/end-conditions.md)."""
-    ends = cfg.get("ends") or {}
-    lumped = any((ends.get(e) or {}).get("condition", "open") != "open" for e in ("kidney", "bladder"))
-    return LUMPED_ENDS_SCHEME if lumped else REFERENCE_SCHEME
-
-
 def reference_config(cfg: dict) -> dict:
-    """A corner's (or an escalated point's) configuration for its fully coupled solve (reference_scheme)."""
+    """A corner's (or an escalated point's) configuration for its fully coupled solve: the partitioned scheme
+    (REFERENCE_SCHEME; it carries the lumped end conditions too, docs/end-conditions.md)."""
     out = copy.deepcopy(cfg)
-    out["solver"]["fully_coupled_scheme"] = reference_scheme(cfg)
+    out["solver"]["fully_coupled_scheme"] = REFERENCE_SCHEME
     return out
 
 
