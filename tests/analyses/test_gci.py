@@ -17,14 +17,14 @@ import pytest
 import xarray as xr
 
 from ureterfsi.analyses import aggregate
-from ureterfsi.data import cf as metadata
 from ureterfsi.data.checked import open_netcdf
 from ureterfsi.data.provenance import FORMAT_VERSION
 from ureterfsi.analyses.gci import (GCI_DATASET, DEFAULT_POINTS_Z, gci_dataset, mesh_measure, representative_cell_size,
                            three_grid_gci, extrapolated_values, quantity_values,
                            write_gci_table)
+from helpers.synthetic import P_FLUX, P_LINE, P_VM, convergence_dataset
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 # --------------------------------------------------------------------------- Celik et al. 2008, Table 1
@@ -153,32 +153,6 @@ def test_malformed_input_raises():
 
 
 # ------------------------------------------------------------------------------------------- datasets
-P_LINE, P_FLUX, P_VM = 2.0, 1.5, 1.2
-
-
-def convergence_dataset(cells=(60000, 140000, 320000), levels=("coarse", "medium", "fine"), flux_sign=1.0):
-    """A mesh-convergence dataset with the layout of aggregate.combine_levels and exact power laws in
-    h = N^(-1/3): line(z) = f(z) (1 + 40 h^2), peak flux = 1e-8 (1 + 30 h^1.5), peak stress = 6e3 (1 - 5 h^1.2)."""
-    cells = np.asarray(cells, dtype=float)
-    h = cells ** (-1.0 / 3.0)
-    z = np.linspace(0.0, 0.05, 201)
-    f = 5e3 * (1 + 0.3 * np.exp(-0.5 * ((z - 0.03) / 5e-3) ** 2))
-    ds = xr.Dataset(
-        {"stent_von_mises_line": (("level", "z"), f[None, :] * (1 + 40.0 * h[:, None] ** P_LINE)),
-         "cells": ("level", cells), "dofs": ("level", 10 * cells), "processes": ("level", np.ones(3)),
-         "wall_time": ("level", [10.0, 20.0, 40.0]),
-         "peak_outlet_flux": ("level", 1e-8 * (1 + flux_sign * 30.0 * h ** P_FLUX)),
-         "peak_stent_max_von_mises": ("level", 6e3 * (1 - 5.0 * h ** P_VM))},
-        coords={"level": ("level", np.array(levels, dtype=object)), "z": ("z", z)})
-    for name in list(ds.variables):
-        units, long_name = metadata.cf_meta(str(name))
-        ds[name].attrs.update(units=units, long_name=long_name)
-    ds.attrs.update(model="3", probe_time=1.5, levels=",".join(levels), config_hash="abc", git_commit="deadbeef",
-                    created="2026-01-01T00:00:00+00:00", ureterfsi_format_version=FORMAT_VERSION, run_fine_cells=int(cells[-1]), Conventions="CF-1.8",
-                    title="ureterfsi mesh convergence: model 3, t = 1.5 s")
-    return ds, f, z
-
-
 def _check_cf(ds):
     for name, var in ds.variables.items():
         assert "units" in var.attrs and "long_name" in var.attrs, name
@@ -251,8 +225,8 @@ def test_gci_dataset_uses_three_finest_of_four():
 
 def test_gci_dataset_from_combine_levels(cfg, tmp_path):
     """The real layout: run files -> aggregate.combine_levels -> gci_dataset (synthetic runs of
-    tests/test_aggregate_figures.py, whose peaks do not depend on the level: diagnosis 'identical')."""
-    from test_aggregate_figures import VM_BASE, synthetic_run
+    tests/analyses/test_aggregate_figures.py, whose peaks do not depend on the level: diagnosis 'identical')."""
+    from helpers.synthetic import VM_BASE, synthetic_run
 
     cells = (60000, 140000, 320000)
     paths = []

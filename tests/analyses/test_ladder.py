@@ -1,6 +1,6 @@
 """Fidelity ladder: errors of a rung against the reference, scene choices, dataset, table, figure.
 
-Runs are built by the study's own probes_dataset from analytic values (tests/test_aggregate_figures.py):
+Runs are built by the study's own probes_dataset from analytic values (tests/analyses/test_aggregate_figures.py):
 a rung that equals the reference has error 0; a rung scaled by (1 + eps) has error eps for every quantity;
 a coarser time grid of the same smooth curves has the interpolation error only; a half model's two holes
 per pair are matched to the quarter model's one.
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from test_aggregate_figures import synthetic_run
+from helpers.synthetic import synthetic_run
 from ureterfsi.analyses import ladder
 from ureterfsi.plotting.style import save_figure
 from ureterfsi.plotting import ladder as plotting_ladder

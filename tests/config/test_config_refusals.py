@@ -14,7 +14,7 @@ import pytest
 from ureterfsi.config import (ConfigError, load_config, load_config_files, main, read_config_args,
                               unmakeable)
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 DEFAULT = REPO / "config" / "config.yaml"
 
 DS = 'design_studies:\n  s1:\n    model: "3"\n    level: coarse\n'   # a design study on model 3, coarse mesh
@@ -411,12 +411,12 @@ SHIPPED = [
     ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/thin_gap.yaml"],
     ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/arrangement_offset.yaml"],
     ["config/config.yaml", "config/segment-10mm.yaml", "config/designs/obstruction_sobol.yaml"],
-    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/e2e.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/e2e.yaml"],
     ["config/config.yaml", "config/occlusion.yaml"],
     ["config/config.yaml", "config/segment-10mm.yaml", "config/occlusion.yaml"],
-    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/e2e.yaml", "tests/data/ends-mini.yaml"],
-    ["config/config.yaml", "config/segment-10mm.yaml", "tests/data/ladder-mini.yaml",
-     "tests/data/ladder-mini-passage.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/e2e.yaml", "tests/overlays/ends-mini.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/ladder-mini.yaml",
+     "tests/overlays/ladder-mini-passage.yaml"],
 ]
 
 
@@ -433,9 +433,9 @@ def test_integer_list_without_blanks_is_not_a_decimal_comma(tmp_path):
 
 
 def test_every_shipped_file_is_checked(tmp_path):
-    shipped = {str(p.relative_to(REPO)) for d in ("config", "config/designs", "tests/data")
+    shipped = {str(p.relative_to(REPO)) for d in ("config", "config/designs", "tests/overlays")
                for p in (REPO / d).glob("*.yaml")}
     assert shipped == {f for chain in SHIPPED for f in chain}
-    from test_workflow_e2e import e2e_config    # the e2e run's own merge (models and levels replaced)
+    from helpers.snakemake_runs import e2e_config    # the e2e run's own merge (models and levels replaced)
 
     load_config(e2e_config(tmp_path / "e2e.yaml"))

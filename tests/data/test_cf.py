@@ -14,9 +14,7 @@ import xarray as xr
 
 from ureterfsi.data import cf as metadata
 from ureterfsi.analyses.gci import gci_dataset
-
-sys.path.insert(0, str(Path(__file__).parent))
-from test_gci import convergence_dataset  # noqa: E402
+from helpers.synthetic import convergence_dataset
 
 CHECKER = Path(sys.executable).with_name("compliance-checker")
 
@@ -78,7 +76,7 @@ def stability_case(name: str, axis: str, steps: int) -> xr.Dataset:
 def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
     """The dataset of a 2 x 2 full-factorial design study over synthetic runs of model 3 (or of a Saltelli
     design of N = 2 over two parameters: 12 rows, 8 points, with its Sobol' indices)."""
-    from test_aggregate_figures import synthetic_run
+    from helpers.synthetic import synthetic_run
     from ureterfsi.designs import results as design_results
     from ureterfsi.designs.expand import studies
     from ureterfsi.config import load_config
@@ -115,7 +113,7 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
 
     cfg = load_config(repo_root / "config/config.yaml")
     if kind in ("run", "models", "ladder"):
-        from test_aggregate_figures import synthetic_run
+        from helpers.synthetic import synthetic_run
         from ureterfsi.analyses import aggregate
         from ureterfsi.analyses import ladder
 
@@ -170,11 +168,11 @@ def test_dataset_passes_cf_checker(kind, tmp_path, repo_root):
 def test_time_coordinate_is_cf_and_read_in_seconds(tmp_path):
     """`time` is written as a CF time coordinate (units '<unit> since <epoch>', calendar) and read back by the
     package's reader as seconds from the run's start, not as dates."""
-    from test_aggregate_figures import synthetic_run
+    from helpers.synthetic import synthetic_run
     from ureterfsi.data.checked import RUN_FILE, open_netcdf
     from ureterfsi.config import load_config
 
-    cfg = load_config(Path(__file__).resolve().parent.parent / "config/config.yaml")
+    cfg = load_config(Path(__file__).resolve().parents[2] / "config/config.yaml")
     run = synthetic_run(cfg, "3", end=0.1)
     path = tmp_path / "run.nc"
     metadata.write_netcdf(run, path)

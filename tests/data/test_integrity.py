@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 from mpi4py import MPI
 
-from test_aggregate_figures import synthetic_run
+from helpers.synthetic import synthetic_run
 from ureterfsi.analyses import aggregate
 from ureterfsi.data.checked import MESH_SIDECAR, BadFile, read_json
 from ureterfsi.config import load_config_files

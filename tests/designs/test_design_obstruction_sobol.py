@@ -12,7 +12,7 @@ from ureterfsi.config.reading import deep_merge, read_yaml
 from ureterfsi.config.validation import load_config_files
 from ureterfsi.designs.expand import saltelli_unit_sample, studies
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 FILES = [REPO / "config/config.yaml", REPO / "config/segment-10mm.yaml", REPO / "config/designs/obstruction_sobol.yaml"]
 NAME = "obstruction_sobol"
 BOUNDS = {"stricture_fraction": (0.0, 0.6), "hole_diameter": (5e-4, 9e-4), "wall_stiffness_scale": (0.5, 1.5)}
@@ -45,12 +45,12 @@ def test_shipped_saltelli_study_expands_to_its_points():
 
 
 def test_dry_run_of_the_shipped_saltelli_study(tmp_path):
-    from test_designs import _dry
+    from helpers.design_runs import dry_run
 
     cfg = {}
     for f in FILES:                                              # the overlays as the command line merges them
         cfg = deep_merge(cfg, read_yaml(f))
-    counts = _dry(tmp_path, cfg, f"design_{NAME}")
+    counts = dry_run(tmp_path, cfg, f"design_{NAME}")
     # and the rung check at the 8 corners of the bounds (on the study's own 10 mm segment: 4 meshes and 4 walls of
     # their own, since no sample point sits at a corner), each on the one-way rung and fully coupled
     assert counts == {"design_solve": 64, "design_mesh": 32 + 4, "design_wall_motion": 32 + 4, "design_dataset": 1,

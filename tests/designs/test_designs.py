@@ -3,7 +3,6 @@ a 100-point study, what a change re-runs, and a 2 x 2 grid end to end on the 10 
 from __future__ import annotations
 
 import copy
-import os
 from pathlib import Path
 
 import numpy as np
@@ -15,9 +14,10 @@ from ureterfsi.config import ConfigError, load_config
 from ureterfsi.designs.expand import studies
 from ureterfsi.designs.space import point_id
 from ureterfsi.mesh.io import read_msh
-from test_workflow_e2e import e2e_config, job_counts, ok, snakemake
+from helpers.design_runs import dry_run, pretend_done
+from helpers.snakemake_runs import e2e_config, job_counts, ok, snakemake
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
 
 
@@ -98,46 +98,19 @@ def test_study_refusals():
         config_with(s={"model": "3", "level": "finest", "grid": {"parameters": {"peak_traction": [3e4]}}})
 
 
-def _dry(work: Path, cfg: dict, target: str, *args):
-    path = work / "cfg.yaml"
-    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    return job_counts(ok(snakemake(work, path, "-n", target, *args, profile=None)))
-
-
 def test_dry_run_of_a_100_point_study(tmp_path):
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"big": grid(hole_diameter=[float(v) for v in np.linspace(5e-4, 9e-4, 10)],
                                          wall_stiffness_scale=[float(v) for v in np.linspace(0.5, 1.5, 10)])}
-    counts = _dry(tmp_path, cfg, "design_big")
+    counts = dry_run(tmp_path, cfg, "design_big")
     # the rung check (default on for the one-way rung): 4 corners on the 10 mm segment (2 hole diameters: 2 meshes;
     # 2 wall stiffnesses: 2 walls), each a one-way and a fully coupled solve (ureterfsi.designs.rung_check)
     assert counts == {"design_solve": 100, "design_mesh": 10 + 2, "design_wall_motion": 10 + 2, "design_dataset": 1,
                       "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_map": 1, "design_big": 1}, counts
     cfg["design_studies"]["big"]["rung_check"] = {"corners": "none"}
-    assert _dry(tmp_path, cfg, "design_big") == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10,
+    assert dry_run(tmp_path, cfg, "design_big") == {"design_solve": 100, "design_mesh": 10, "design_wall_motion": 10,
                                                  "design_dataset": 1, "design_figures": 1, "design_map": 1,
                                                  "design_big": 1}
-
-
-def _pretend_done(work: Path, cfg: dict, name: str) -> None:
-    """Every output of study `name` (points and, with a rung check, corners) as an empty file, in job order (then
-    `snakemake --touch` records them as made by their jobs)."""
-    from ureterfsi.designs.expand import corner_run_paths, design_figure_kinds
-
-    st = studies(load_config(copy.deepcopy(cfg)))[name]
-    every = st.points + (st.check.corners if st.check else [])
-    runs = [f for pair in corner_run_paths(st).values() for f in pair] if st.check else []
-    stages = [[f"results/designs/meshes/{p.mesh_id}.{e}" for p in every for e in ("msh", "json")]
-              + [f"results/designs/wall_motion/{p.wall_id}.nc" for p in every],
-              [f"results/designs/{name}/{p.id}/run.nc" for p in st.points] + runs,
-              [f"results/designs/{name}/rung_check.nc"] if st.check else [], [f"results/designs/{name}.nc"],
-              [f"results/figures/designs/{name}_{k}.{e}" for k in design_figure_kinds(st)
-               for e in cfg["figures"]["formats"]]]
-    for i, stage in enumerate(stages):
-        for f in stage:
-            (work / f).parent.mkdir(parents=True, exist_ok=True)
-            (work / f).touch()
-            os.utime(work / f, (1e9 + i, 1e9 + i))
 
 
 def test_one_stent_change_reruns_only_that_points_mesh_and_solve(tmp_path):
@@ -147,15 +120,15 @@ def test_one_stent_change_reruns_only_that_points_mesh_and_solve(tmp_path):
     cfg["design_studies"]["oat"]["rung_check"] = {"corners": "none"}    # the points' chain alone (corners: below)
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    _pretend_done(tmp_path, cfg, "oat")
+    pretend_done(tmp_path, cfg, "oat")
     ok(snakemake(tmp_path, path, "--touch", "--cores", "1", "design_oat", profile=None))   # records the metadata
-    assert _dry(tmp_path, cfg, "design_oat") == {}
+    assert dry_run(tmp_path, cfg, "design_oat") == {}
     cfg["design_studies"]["oat"]["grid"]["parameters"]["hole_diameter"][2] = 8.5e-4
-    assert _dry(tmp_path, cfg, "design_oat") == {"design_mesh": 1, "design_solve": 1, "design_dataset": 1,
+    assert dry_run(tmp_path, cfg, "design_oat") == {"design_mesh": 1, "design_solve": 1, "design_dataset": 1,
                                                   "design_figures": 1, "design_oat": 1}
     cfg["design_studies"]["oat"]["grid"]["parameters"]["hole_diameter"][2] = 8e-4
     cfg["design_studies"]["oat"]["grid"]["parameters"]["wall_stiffness_scale"][0] = 0.6
-    assert _dry(tmp_path, cfg, "design_oat") == {"design_wall_motion": 1, "design_solve": 1, "design_dataset": 1,
+    assert dry_run(tmp_path, cfg, "design_oat") == {"design_wall_motion": 1, "design_solve": 1, "design_dataset": 1,
                                                   "design_figures": 1, "design_oat": 1}
 
 

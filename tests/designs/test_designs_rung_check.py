@@ -1,6 +1,6 @@
 """Design studies, "trust at every point" (ureterfsi.designs.rung_check): the corners of a study's design space,
 the region they check, the corners' configurations on the 10 mm segment, the dataset's rung errors from synthetic
-run files, and the corner jobs of a dry run. The end to end run is tests/test_designs.py's 2 x 2 grid."""
+run files, and the corner jobs of a dry run. The end to end run is tests/designs/test_designs.py's 2 x 2 grid."""
 from __future__ import annotations
 
 import copy
@@ -22,7 +22,7 @@ from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import rung_check_metadata
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
 MINI = yaml.safe_load((REPO / "config" / "segment-10mm.yaml").read_text())
 
@@ -279,21 +279,21 @@ def test_an_unchecked_study_says_so(tmp_path):
 def test_dry_run_lists_the_corner_jobs(tmp_path):
     """design_<study> of a 3 x 2 grid on the 50 mm model: its 6 points and the 4 corners' one-way and fully coupled
     solves on the segment (their own meshes and wall); design_<study>_rung_check the corners alone."""
-    from test_designs import _dry
+    from helpers.design_runs import dry_run
 
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"s": grid(hole_diameter=[5e-4, 6e-4, 7e-4], hole_pair_spacing=[0.005, 0.025])}
-    counts = _dry(tmp_path, cfg, "design_s")
+    counts = dry_run(tmp_path, cfg, "design_s")
     assert counts == {"design_solve": 6, "design_mesh": 6 + 4, "design_wall_motion": 1 + 1, "design_corner_solve": 8,
                       "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
                       "design_s": 1}, counts
-    assert _dry(tmp_path, cfg, "design_s_rung_check") == {"design_mesh": 4, "design_wall_motion": 1,
+    assert dry_run(tmp_path, cfg, "design_s_rung_check") == {"design_mesh": 4, "design_wall_motion": 1,
                                                           "design_corner_solve": 8, "design_rung_check": 1,
                                                           "design_s_rung_check": 1}
     # on the segment: the corner points' one-way runs serve the check, only the 4 fully coupled solves are added
     mini = deep_merge(copy.deepcopy(BASE), MINI)
     mini["design_studies"] = {"s": grid(model="2", hole_diameter=[5e-4, 6e-4, 7e-4], hole_pair_spacing=[0.005, 0.01])}
-    counts = _dry(tmp_path, mini, "design_s")
+    counts = dry_run(tmp_path, mini, "design_s")
     assert counts == {"design_solve": 6, "design_mesh": 6, "design_wall_motion": 1, "design_corner_solve": 4,
                       "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
                       "design_s": 1}, counts
@@ -316,21 +316,21 @@ def test_only_a_moved_corner_reruns(tmp_path):
     """Corners are content-addressed like the points: an interior point's change re-runs that point alone; moving
     the design space's maximum hole diameter re-runs the two corners there (their mesh, both their solves) besides
     the moved points."""
-    from test_designs import _dry, _pretend_done
-    from test_workflow_e2e import ok, snakemake
+    from helpers.design_runs import dry_run, pretend_done
+    from helpers.snakemake_runs import ok, snakemake
 
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"s": grid(hole_diameter=[5e-4, 6e-4, 7e-4], wall_stiffness_scale=[0.5, 1.5])}
     path = tmp_path / "cfg.yaml"
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    _pretend_done(tmp_path, cfg, "s")
+    pretend_done(tmp_path, cfg, "s")
     ok(snakemake(tmp_path, path, "--touch", "--cores", "1", "design_s", profile=None))
-    assert _dry(tmp_path, cfg, "design_s") == {}
+    assert dry_run(tmp_path, cfg, "design_s") == {}
     cfg["design_studies"]["s"]["grid"]["parameters"]["hole_diameter"][1] = 6.5e-4
-    assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1, "design_solve": 2, "design_dataset": 1,
+    assert dry_run(tmp_path, cfg, "design_s") == {"design_mesh": 1, "design_solve": 2, "design_dataset": 1,
                                                "design_figures": 1, "design_map": 1, "design_s": 1}
     cfg["design_studies"]["s"]["grid"]["parameters"]["hole_diameter"][1:] = [6e-4, 8e-4]
-    assert _dry(tmp_path, cfg, "design_s") == {"design_mesh": 1 + 1, "design_solve": 2, "design_corner_solve": 2 * 2,
+    assert dry_run(tmp_path, cfg, "design_s") == {"design_mesh": 1 + 1, "design_solve": 2, "design_corner_solve": 2 * 2,
                                                "design_rung_check": 1, "design_dataset": 1, "design_figures": 1,
                                                "design_map": 1, "design_s": 1}
 

@@ -18,7 +18,7 @@ from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import VARIABLES
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
 BOUNDS = {"peak_traction": [3e4, 7e4], "wall_stiffness_scale": [0.5, 1.5]}
 
@@ -203,11 +203,11 @@ def test_map_figure_plots_the_grid_values():
 
 def test_dry_run_of_a_saltelli_study(tmp_path):
     """D = 2, N = 4: 24 rows, 16 distinct points, each one solve on its own wall motion; the Sobol' figure."""
-    from test_designs import _dry
+    from helpers.design_runs import dry_run
 
     cfg = copy.deepcopy(BASE)
     cfg["design_studies"] = {"s": saltelli(size=4)}
-    counts = _dry(tmp_path, cfg, "design_s")
+    counts = dry_run(tmp_path, cfg, "design_s")
     # and the rung check's 4 corners of the bounds on the 10 mm segment (one mesh, a wall each, two solves each)
     assert counts == {"design_solve": 16, "design_mesh": 1 + 1, "design_wall_motion": 16 + 4, "design_dataset": 1,
                       "design_corner_solve": 2 * 4, "design_rung_check": 1, "design_figures": 1, "design_sensitivity": 1, "design_s": 1}, counts

@@ -12,7 +12,7 @@ import pytest
 from dolfinx import fem
 from petsc4py import PETSc
 
-from _engine_cases import FLUID, WALL, tube_problem
+from helpers.engine_cases import FLUID, WALL, tube_problem
 from ureterfsi.fsi import BlockGaussSeidel, NewtonDivergence, SolverOptions
 
 TIGHT = dict(newton_rtol=1e-10, newton_atol=1e-14, reuse_jacobian=True, reuse_contraction=0.3)
@@ -172,7 +172,7 @@ def test_mumps_workspace_reaches_every_factorisation(lu_run):
     """SolverOptions.mumps_workspace_percent is ICNTL(14) of every MUMPS factor the strategies create, read back
     from the factors: the whole system, each block_gauss_seidel split, and the flow block and mesh-motion LU of a
     segregated fluid-alone solve; the default leaves MUMPS's own 20 %."""
-    from test_fluid_alone import run as fluid_run
+    from helpers.fluid_tube import run as fluid_run
     assert lu_run[0].factor_matrix().getMumpsIcntl(14) == 20
     whole, _ = _run("mumps", steps=1, mumps_workspace_percent=73)
     assert whole.factor_matrix().getMumpsIcntl(14) == 73
@@ -247,7 +247,7 @@ def test_the_fully_coupled_rung_reads_its_own_linear_solver():
 
     from ureterfsi.config import load_config_files
     from ureterfsi.study.options import solver_options
-    cfg = load_config_files([str(Path(__file__).resolve().parents[1] / "config/config.yaml")])
+    cfg = load_config_files([str(Path(__file__).resolve().parents[2] / "config/config.yaml")])
     cfg["solver"] |= {"linear_solver": "mumps", "fully_coupled_linear_solver": "block_gauss_seidel",
                       "krylov_forcing": "eisenstat_walker"}
     coupled, other = solver_options(cfg, fully_coupled=True), solver_options(cfg)
@@ -261,7 +261,7 @@ def test_the_fully_coupled_rung_reads_its_own_linear_solver():
 
 
 def test_refusals_and_failure_report():
-    from test_fluid_alone import tube as fluid_tube
+    from helpers.fluid_tube import tube as fluid_tube
     from ureterfsi.fsi import FluidRegion, MonolithicFSI, NewtonianFluid, Scene
     msh, ct, ft = fluid_tube(4)
     fluid_alone = Scene(msh, ct, ft, fluid=FluidRegion([1], NewtonianFluid(1000.0, 1e-3)))

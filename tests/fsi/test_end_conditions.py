@@ -200,7 +200,7 @@ def test_partitioned_scheme_refuses_lumped_conditions():
 ])
 def test_end_conditions_refused_in_one_line(change, key, text):
     """A valve resisting forward flow more than backflow, an implausible urine production: one line naming the
-    key. (Voiding on a one-way study is posed: its wall takes the urine pressure, tests/test_one_way_wall_pressure.py.)"""
+    key. (Voiding on a one-way study is posed: its wall takes the urine pressure, tests/study/test_one_way_wall_pressure.py.)"""
     from ureterfsi.config import ConfigError, deep_merge, load_config
     cfg = load_config()
     cfg["ends"] = deep_merge(cfg["ends"], change)
@@ -210,13 +210,13 @@ def test_end_conditions_refused_in_one_line(change, key, text):
 
 
 def moving_wall_pelvis_run(dt, end=0.04):
-    """The engine's r-z tube (tests/_engine_cases: a Mooney-Rivlin wall under a travelling load, fully coupled)
+    """The engine's r-z tube (tests/helpers/engine_cases: a Mooney-Rivlin wall under a travelling load, fully coupled)
     with a pelvis at its inlet (production 5e-8 m^3/s into C = 1e-11 m^3/Pa) and the outlet open: per step
     (production - C dp/dt - Q_out, S, the BDF derivative of V = int J dX, Q_in - Q_out, the engine's recorded
     kidney-face flux (FaceFlux, w of the current iterate) minus the probes' (w the step's x_dot))."""
     from dataclasses import replace
 
-    from _engine_cases import INLET as T_IN, OUTLET as T_OUT, REFERENCE_STRESS, tube_case
+    from helpers.engine_cases import INLET as T_IN, OUTLET as T_OUT, REFERENCE_STRESS, tube_case
     production, compliance = 5.0e-8, 1.0e-11
     case = tube_case(n_axial=20)
     ends = [OpenBoundary([T_IN], REFERENCE_STRESS, condition=Compartment(compliance, lambda t: production,

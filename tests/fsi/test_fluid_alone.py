@@ -21,33 +21,13 @@ import pytest
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
-from dolfinx import mesh as dmesh
-from mpi4py import MPI
 
-from _compare import assert_same_arithmetic
-from _engine_cases import FailingFactorisation
 from ureterfsi.fsi import (DirichletCondition, FluidRegion, MonolithicFSI, NewtonianFluid, OpenBoundary,
                            Scene, SolverOptions)
 from ureterfsi.fsi import physics
-from ureterfsi.fsi.tagging import tag_cells, tag_facets
-
-R0, L, A, OMEGA = 1e-3, 4e-3, 0.05, 2 * math.pi * 5.0    # m, m, -, rad/s
-FLUID, BOTTOM, TOP, WALL, AXIS = 1, 1, 2, 3, 4
-
-
-def wall_displacement(x, t):
-    """u_r = a sin(omega t) r (uniform radial stretch of the whole fluid), u_z = 0."""
-    return np.vstack([A * math.sin(OMEGA * t) * x[0], np.zeros_like(x[1])])
-
-
-def tube(n=8):
-    msh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([R0, L])], [n, 4 * n],
-                                 dmesh.CellType.triangle)
-    ct = tag_cells(msh, {FLUID: lambda x: np.full(x.shape[1], True)})
-    eps = 1e-12
-    ft = tag_facets(msh, {BOTTOM: lambda x: x[1] < eps, TOP: lambda x: x[1] > L - eps,
-                          WALL: lambda x: x[0] > R0 - eps, AXIS: lambda x: x[0] < eps})
-    return msh, ct, ft
+from helpers.compare import assert_same_arithmetic
+from helpers.engine_cases import FailingFactorisation
+from helpers.fluid_tube import A, AXIS, BOTTOM, FLUID, L, OMEGA, R0, TOP, WALL, run, tube, wall_displacement
 
 
 def bulged_map(x, t):
@@ -55,42 +35,6 @@ def bulged_map(x, t):
     wall, the axis and the end faces (so it agrees with every displacement condition of the tube)."""
     bulge = 0.5 * x[0] * (R0 - x[0]) / R0 * np.sin(math.pi * x[1] / L)
     return np.vstack([A * math.sin(OMEGA * t) * (x[0] + bulge), np.zeros_like(x[1])])
-
-
-KEEP = object()
-
-
-def run(dt, steps, coupling="monolithic", mesh_motion=None, swap_to=KEEP, **options):
-    """The tube's flow over `steps` steps: (outflow per step, fluid volume, problem); `swap_to`: a mesh motion
-    given to the posed problem (MonolithicFSI.use_mesh_motion) before its run."""
-    msh, ct, ft = tube()
-    scene = Scene(msh, ct, ft, fluid=FluidRegion([FLUID], NewtonianFluid(1000.0, 1e-3)), mesh_motion=mesh_motion,
-                  open_boundaries=[OpenBoundary([TOP], normal_stress=0.0, backflow=1.0)],
-                  dirichlet=[DirichletCondition("velocity", [BOTTOM]),
-                             DirichletCondition("velocity", [WALL],
-                                                lambda x, t: np.vstack([A * OMEGA * math.cos(OMEGA * t) * x[0],
-                                                                        np.zeros_like(x[1])])),
-                             DirichletCondition("velocity", [AXIS], components=[0]),
-                             DirichletCondition("displacement", [WALL, BOTTOM, TOP], wall_displacement),
-                             DirichletCondition("displacement", [AXIS], components=[0])],
-                  axisymmetric=True)
-    pb = MonolithicFSI(scene, SolverOptions(mesh_motion_coupling=coupling, **options))
-    if swap_to is not KEEP:
-        pb.use_mesh_motion(swap_to)
-    pb.solve_steady()
-    parts, dots = pb.split(), pb.split(pb.x_dot)
-    F = physics.deformation_gradient(pb.ops, parts["displacement"])
-    J = ufl.det(F)
-    n_da = J * ufl.inv(F).T * pb.ops.normal()
-    rel = pb.ops.vec(parts["velocity"]) - pb.ops.vec(dots["displacement"])
-    outflow = fem.form(ufl.dot(rel, n_da) * pb.ops.weight * pb.ds(TOP))
-    volume = fem.form(J * pb.ops.weight * pb.dx(FLUID))
-    q, vol = [], [fem.assemble_scalar(volume)]
-    for _ in range(steps):
-        pb.step(dt)
-        q.append(fem.assemble_scalar(outflow))
-        vol.append(fem.assemble_scalar(volume))
-    return np.array(q), np.array(vol), pb
 
 
 MOTIONS = [("monolithic", None), ("segregated", None), ("segregated", bulged_map)]
@@ -293,7 +237,7 @@ def test_extrapolated_predictors_save_newton_iterations_not_accuracy():
 _PARALLEL_DRIVER = """
 import json, sys
 sys.path.insert(0, {tests!r})
-from test_fluid_alone import run
+from helpers.fluid_tube import run
 q, _, pb = run(2e-3, 6, "segregated")
 q = [pb.comm.allreduce(v) for v in q]
 nz = pb.A.getInfo()["nz_used"]
@@ -311,7 +255,7 @@ def test_segregated_flow_matrix_is_the_same_in_parallel(tmp_path):
     for n in (1, 2):
         out = tmp_path / f"np{n}.json"
         script = tmp_path / "driver.py"
-        script.write_text(_PARALLEL_DRIVER.format(tests=str(Path(__file__).parent), out=str(out)))
+        script.write_text(_PARALLEL_DRIVER.format(tests=str(Path(__file__).resolve().parents[1]), out=str(out)))
         proc = subprocess.run(["mpiexec", "-n", str(n), "--allow-run-as-root", "--oversubscribe", sys.executable,
                                str(script)], capture_output=True, text=True, timeout=600,
                               env=dict(os.environ, OMPI_MCA_rmaps_base_oversubscribe="1"))

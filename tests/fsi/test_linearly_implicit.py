@@ -1,7 +1,7 @@
 """The linearly implicit urine step (SolverOptions.urine_step "linearly_implicit", ureterfsi.fsi.linearly_implicit):
 BDF2 with the convecting velocity extrapolated from the two previous steps, one linear system per step.
 
-On the expanding tube of test_fluid_alone (ALE, convection, backflow-stabilised open end):
+On the expanding tube of tests/helpers/fluid_tube.py (ALE, convection, backflow-stabilised open end):
 - its temporal order against the time-continuous solution, represented by the fully implicit (Newton) BDF2 solution
   at a 32x shorter step: ~2 (the extrapolation's O(dt^2) error does not lower BDF2's order);
 - it conserves mass as exactly as Newton's step (the continuity rows are linear either way);
@@ -9,18 +9,13 @@ On the expanding tube of test_fluid_alone (ALE, convection, backflow-stabilised 
   differs from Newton's converged step by O(dt^2) (a step whose convecting velocity were the previous state's would
   differ by O(dt) and fail the order test).
 """
-import sys
-from pathlib import Path
+import math
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_fluid_alone import L, R0, A, OMEGA, run  # noqa: E402
-
-import math  # noqa: E402
-
-from ureterfsi.scenes import verification as V  # noqa: E402
+from ureterfsi.scenes import verification as V
+from helpers.fluid_tube import L, R0, A, OMEGA, run
 
 END = 0.032
 TIGHT = dict(newton_atol=1e-16, newton_rtol=1e-13, reuse_jacobian=True, predictor="quadratic")

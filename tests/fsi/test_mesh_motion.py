@@ -17,7 +17,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from _engine_cases import field_errors, tube_problem, tube_run
+from helpers.engine_cases import field_errors, tube_problem, tube_run
 from ureterfsi.fsi import SolverOptions, physics
 from ureterfsi.fsi.operators import Operators
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-DRIVER = Path(__file__).resolve().parent / "mpi_driver.py"
+DRIVER = Path(__file__).resolve().parents[1] / "helpers" / "mpi_driver.py"
 QOIS = ("outlet_flux", "max_wall_displacement", "min_ale_jacobian")
 
 pytestmark = [pytest.mark.mpi,

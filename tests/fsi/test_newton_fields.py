@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _engine_cases import field_errors, tube_problem, tube_reference, tube_run
+from helpers.engine_cases import field_errors, tube_problem, tube_reference, tube_run
 from ureterfsi.fsi import NewtonDivergence, SolverOptions
 
 CONFIG_TOL = dict(linear_solver="mumps", newton_rtol=1e-8, newton_atol=1e-10)

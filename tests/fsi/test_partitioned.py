@@ -15,7 +15,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from _engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
+from helpers.engine_cases import (WALL_ENDS, FailingFactorisation, field_errors, tube_case, tube_problem, tube_reference,
                            tube_run)
 from ureterfsi.fsi import MonolithicFSI, NewtonDivergence, SolverOptions, sparsity
 from ureterfsi.fsi.condensation import CondensedSolidFactor, mass_eigenvalue_floor

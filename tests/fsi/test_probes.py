@@ -118,7 +118,7 @@ def test_point_probe_values_do_not_depend_on_the_partition(tmp_path):
     for n in (1, 2):
         out = tmp_path / f"np{n}.json"
         script = tmp_path / "driver.py"
-        script.write_text(_PROBE_DRIVER.format(src=str(Path(__file__).resolve().parent.parent), out=str(out)))
+        script.write_text(_PROBE_DRIVER.format(src=str(Path(__file__).resolve().parents[2]), out=str(out)))
         proc = subprocess.run(["mpiexec", "-n", str(n), "--allow-run-as-root", "--oversubscribe", sys.executable,
                                str(script)], capture_output=True, text=True, timeout=600,
                               env=dict(os.environ, OMPI_MCA_rmaps_base_oversubscribe="1"))
@@ -233,7 +233,7 @@ def test_end_face_pressure_mean_of_a_prescribed_field(c):
     """ureterfsi.fsi.probes.end_face_pressure_forms on the r-z tube of the engine tests: p = a + b z + e r (P1, exact)
     with the ALE displacement u_r = c r^2 (c = 0: reference faces). The current-area mean on the face z = z_f is
     a + b z_f + e int r r'(r) r''(r) dr / int r'(r) r''(r) dr, r' = r + c r^2 (the current radius), r'' = dr'/dr."""
-    from _engine_cases import INLET, LENGTH, OUTLET, R_I, tube_problem
+    from helpers.engine_cases import INLET, LENGTH, OUTLET, R_I, tube_problem
     from ureterfsi.fsi.probes import end_face_pressure_forms
 
     pb, _ = tube_problem()

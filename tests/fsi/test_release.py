@@ -1,6 +1,6 @@
 """A released problem leaves neither PETSc objects nor memory behind (fsi.release, MonolithicFSI.close).
 
-tests/release_driver.py builds, steps and releases a tube problem ten times (whole-system LU, partitioned and
+tests/helpers/release_driver.py builds, steps and releases a tube problem ten times (whole-system LU, partitioned and
 block Gauss-Seidel strategies in turn, 38 033 unknowns, ~75 MiB of matrices and factors each) in a process of
 its own, reading PETSc's live objects per class from PETSc's log after each: they and the resident memory must
 stay flat. Before close() and the garbage collection of fsi.release, every problem left its matrices, KSPs and
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-DRIVER = Path(__file__).resolve().parent / "release_driver.py"
+DRIVER = Path(__file__).resolve().parents[1] / "helpers" / "release_driver.py"
 RSS_GROWTH_MIB = 40.0        # from the 3rd to the 10th problem; a leaking strategy alone leaks ~150 MiB there
 
 

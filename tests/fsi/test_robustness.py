@@ -1,4 +1,4 @@
-"""Robustness of the time integrator on the miniature tube (tests/_engine_cases.py):
+"""Robustness of the time integrator on the miniature tube (tests/helpers/engine_cases.py):
 retries with dt halving, unrecoverable steps, ALE mesh inversion, checkpoint/resume, progress log."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from _engine_cases import QoIObserver, Quantities, field_errors, tube_problem
+from helpers.engine_cases import QoIObserver, Quantities, field_errors, tube_problem
 from ureterfsi.fsi import Observer, SolveFailure, SolverOptions, TimeIntegrator, TimeSettings
 from ureterfsi.fsi.integrator import MeshInversion, StepFailure
 

@@ -1,8 +1,8 @@
 """Run the miniature tube case for a few steps and write its quantities of interest to JSON.
 
-    mpiexec -n 2 python tests/mpi_driver.py out.json [--steps N] [--dt DT]
+    mpiexec -n 2 python tests/helpers/mpi_driver.py out.json [--steps N] [--dt DT]
 
-Used by tests/test_mpi.py to compare 1- and 2-process runs. All QoIs are reduced over the ranks
+Used by tests/fsi/test_mpi.py to compare 1- and 2-process runs. All QoIs are reduced over the ranks
 (assemble_scalar + allreduce, MAX/MIN of owned values); rank 0 writes the file.
 """
 from __future__ import annotations
@@ -13,12 +13,12 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from mpi4py import MPI  # noqa: E402
 
-from _engine_cases import QoIObserver, Quantities, tube_problem  # noqa: E402
+from helpers.engine_cases import QoIObserver, Quantities, tube_problem  # noqa: E402
 from ureterfsi.fsi import Observer, SolverOptions, TimeIntegrator, TimeSettings  # noqa: E402
 
 

@@ -1,11 +1,11 @@
-"""Build, step and release a tube problem (tests/_engine_cases.py) ten times, cycling through the whole-system LU,
+"""Build, step and release a tube problem (tests/helpers/engine_cases.py) ten times, cycling through the whole-system LU,
 the partitioned and the block Gauss-Seidel strategies; after each, print one JSON line: PETSc's live objects per
 class (creations minus destructions, from PETSc's own log) and the process's resident memory in MiB.
 
-    python tests/release_driver.py close|drop
+    python tests/helpers/release_driver.py close|drop
 
 close: MonolithicFSI.close() in a with-block; drop: the last reference dropped (collected on one process).
-Used by tests/test_release.py (a process of its own: PETSc's log, once begun, stays on).
+Used by tests/fsi/test_release.py (a process of its own: PETSc's log, once begun, stays on).
 """
 from __future__ import annotations
 
@@ -17,12 +17,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from petsc4py import PETSc  # noqa: E402
 
-from _engine_cases import tube_problem  # noqa: E402
+from helpers.engine_cases import tube_problem  # noqa: E402
 from ureterfsi.fsi import SolverOptions  # noqa: E402
 
 STRATEGIES = ({}, {"coupling_scheme": "partitioned"}, {"linear_solver": "block_gauss_seidel"})

@@ -17,7 +17,7 @@ from ureterfsi.analyses import ladder
 from ureterfsi.designs.results import HOLE_SURFACE, STENT_SURFACE
 from ureterfsi.study import oneway
 
-from _compare import assert_same_arithmetic
+from helpers.compare import assert_same_arithmetic
 from ureterfsi.study.coupled import run
 from ureterfsi.study.options import RunSpec
 
@@ -80,7 +80,7 @@ def test_urine_moves_and_volume_balances(mini):
         dvdt.append(((1 + 2 * w) / (1 + w) * vol[n] - (1 + w) * vol[n - 1] + w * w / (1 + w) * vol[n - 2]) / dts[n - 1])
     net = (q_in - q_out)[1:]
     # measured: 3.0% of the peak rate at dt = 20 ms. The defect is the discrete geometric conservation
-    # error of BDF on the moving mesh, O(dt^2): tests/test_conservation.py shows 1.1e-4 at dt = 5 ms.
+    # error of BDF on the moving mesh, O(dt^2): tests/verification/test_conservation.py shows 1.1e-4 at dt = 5 ms.
     assert np.max(np.abs(np.asarray(dvdt) - net)) < 0.05 * np.max(np.abs(net)), (dvdt, net)
     # the volume rate the continuity rows balance (docs/end-conditions.md): Q_in - Q_out to the solver's tolerance
     rate = ds["fluid_volume_rate"].values
@@ -135,7 +135,7 @@ def test_algebraic_mesh_motion_follows_the_extension(mini_dir, repo_root, mini_o
     assert alg.attrs["one_way_mesh_motion_boundary_mismatch"] < 0.01
     errors = {q: ladder.relative_error(ext, alg, q) for q in ladder.QUANTITIES if q in ext}
     print("algebraic vs extension mesh motion:", {q: f"{e:.2e}" for q, e in errors.items()})
-    # the wall motion is the r-z solve's in both: two solves of the same arithmetic (tests/_compare.py);
+    # the wall motion is the r-z solve's in both: two solves of the same arithmetic (tests/helpers/compare.py);
     # relative_error is relative to the quantity's scale, so this is 4 ulps of the scale
     assert errors["max_wall_displacement"] <= 4 * np.finfo(float).eps
     assert max(errors.values()) < 1e-2, errors
@@ -145,7 +145,7 @@ def test_algebraic_mesh_motion_follows_the_extension(mini_dir, repo_root, mini_o
 
 def test_shared_wall_motion_is_the_runs_own(mini_dir, repo_root, mini_one_way):
     """Step 1 of the rung as a job of its own (rule wall_motion): the one-way run reading it equals the run that
-    solves its own wall to the rounding of the same arithmetic (tests/_compare.py); a file from another wall
+    solves its own wall to the rounding of the same arithmetic (tests/helpers/compare.py); a file from another wall
     configuration or time step is refused."""
     import xarray as xr
 

@@ -137,7 +137,7 @@ def test_coarse_hole_case_runs_in_3d_with_bounded_energy_and_conserved_volume(ho
     assert ds["kinetic_energy_solid"].values.max() == 0.0 and ds["elastic_energy"].values.max() == 0.0
     # the squeezed wall drives the urine (P_wall < 0: the urine at ~p_ref pushes back on the inward-moving
     # wall, and as much p_ref work leaves through the open ends); the net work is what the urine gains in
-    # kinetic energy plus what it dissipates (kinetic energy theorem, tests/test_fluid_alone.py)
+    # kinetic energy plus what it dissipates (kinetic energy theorem, tests/fsi/test_fluid_alone.py)
     p_wall, p_open = ds["prescribed_power"].values, ds["open_boundary_power"].values
     assert np.all(p_wall[1:] < 0) and np.all(p_open[1:] > 0)
     t, e = ds["time"].values, ds["kinetic_energy"].values

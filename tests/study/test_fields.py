@@ -13,7 +13,7 @@ import xarray as xr
 
 from ureterfsi.config import load_config_files
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
-"""tests/_compare.py: equal to the rounding of the same arithmetic, measured on the scale, not per element."""
+"""tests/helpers/compare.py: equal to the rounding of the same arithmetic, measured on the scale, not per element."""
 import numpy as np
 import pytest
 
-from _compare import assert_same_arithmetic
+from helpers.compare import assert_same_arithmetic
 
 EPS = np.finfo(float).eps
 

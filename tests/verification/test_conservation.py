@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _engine_cases import VolumeFluxObserver, Quantities, tube_problem
+from helpers.engine_cases import VolumeFluxObserver, Quantities, tube_problem
 from ureterfsi.fsi import TimeIntegrator, TimeSettings
 
 

@@ -4,7 +4,7 @@ A fast coarse variant runs in CI; the `slow` variant uses a mesh with 4x the cel
 Tolerances are the errors actually achieved (refinement 0.5: drag 0.6 %, lift 0.1 %, u_y(A) 1.0 %,
 u_x(A) 0.2 %; refinement 2: all <= 0.15 %) with a margin. A broken coupling (flag not deforming, no
 traction transfer) fails the displacement checks by ~100 %.
-The transient FSI2 / FSI3: tests/test_turek_hron_transient.py.
+The transient FSI2 / FSI3: tests/verification/test_turek_hron_transient.py.
 """
 from __future__ import annotations
 

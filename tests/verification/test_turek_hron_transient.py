@@ -12,7 +12,7 @@ import pytest
 
 th = pytest.importorskip("ureterfsi.scenes.turek_hron_transient")
 
-RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
 
 
 def test_periodic_stats_on_a_known_signal():

@@ -1,6 +1,7 @@
 """Architecture: no code touches another package's underscore names, ureterfsi has no import circle (nor
 a function-level one) and loads from any of its entry modules, its sub-packages keep their boundaries, and no module
-of it is longer than MAX_LINES (unless LONG_MODULES says why it must be).
+of it is longer than MAX_LINES (unless LONG_MODULES says why it must be); the tests sit in folders of what they
+test (never at the top of tests/) and no file under tests/ imports a test file.
 
 The private-name scan (AST, no import): an attribute access `x._name` on anything but `self`/`cls`, or a
 `from m import _name`, is a violation when `_name` is one of ureterfsi's own underscore names (a method,
@@ -17,13 +18,13 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCANNED = ("ureterfsi", "benchmarks", "workflow/scripts")
 ENGINE = "ureterfsi/fsi"
 # (file, name): a test that deliberately poisons an engine internal
 EXEMPT = {
-    ("tests/test_fluid_alone.py", "_reaction_ready"),   # forces the reaction to be assembled anew, to compare
-    ("tests/test_fluid_alone.py", "_predict"),          # replaced by a predictor that returns NaN
+    ("tests/fsi/test_fluid_alone.py", "_reaction_ready"),   # forces the reaction to be assembled anew, to compare
+    ("tests/fsi/test_fluid_alone.py", "_predict"),          # replaced by a predictor that returns NaN
 }
 
 
@@ -358,6 +359,50 @@ def test_the_package_is_sub_packages_with_all_and_listed():
 def test_no_module_reads_the_tests_directory():
     found = test_fixture_paths(_sources("ureterfsi"))
     assert not found, "ureterfsi reads test fixtures:\n" + "\n".join(found)
+
+
+def test_layout_violations(sources: dict) -> list[str]:
+    """'path: ...' for every test file at the top level of tests/ (tests sit in the folder of what they test), and
+    every import of a test module (a module named test_*) from any file under tests/ (shared code lives in
+    tests/helpers or a conftest.py, never in another test file)."""
+    found = []
+    for path, src in sources.items():
+        parts = Path(path).parts
+        if len(parts) == 2 and parts[1].startswith("test_"):
+            found.append(f"{path}: a test file at the top level of tests/")
+        for node in _imports(ast.parse(src), import_time=False):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                module = "." * node.level + (node.module or "")
+                names = [module] if _names_a_test(module) else [module.rstrip(".") + "." + a.name for a in node.names]
+            found += [f"{path}:{node.lineno}: imports {n}" for n in names if _names_a_test(n)]
+    return sorted(found)
+
+
+def _names_a_test(module: str) -> bool:
+    return any(part.startswith("test_") for part in module.split("."))
+
+
+test_layout_violations.__test__ = False   # a helper, not a test
+
+
+def test_the_layout_check_finds_planted_violations():
+    sources = {"tests/test_loose.py": "", "tests/conftest.py": "",
+               "tests/analyses/test_gci.py": "def f():\n    from test_aggregate_figures import synthetic_run\n",
+               "tests/data/test_cf.py": "import analyses.test_gci as g\n",
+               "tests/designs/test_designs.py": "from . import test_other\n",
+               "tests/helpers/synthetic.py": "from helpers.compare import assert_same_arithmetic\n",
+               "tests/fsi/test_mpi.py": "from helpers.engine_cases import tube_problem\n"}
+    assert test_layout_violations(sources) == ["tests/analyses/test_gci.py:2: imports test_aggregate_figures",
+                                               "tests/data/test_cf.py:1: imports analyses.test_gci",
+                                               "tests/designs/test_designs.py:1: imports .test_other",
+                                               "tests/test_loose.py: a test file at the top level of tests/"]
+
+
+def test_tests_mirror_the_package_and_import_no_test_file():
+    found = test_layout_violations(_sources("tests"))
+    assert not found, "tests/ layout:\n" + "\n".join(found)
 
 
 def test_no_text_names_a_stop_number():

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import jinja2
 import pytest
 
-REPORT = Path(__file__).resolve().parents[1] / "workflow" / "report"
+REPORT = Path(__file__).resolve().parents[2] / "workflow" / "report"
 
 
 def _render(name: str, cfg: dict) -> str:

@@ -20,7 +20,7 @@ import sys
 import pytest
 import xarray as xr
 
-from test_workflow_e2e import REPO, SLURM_PROFILE, e2e_config, ok, planned_jobs
+from helpers.snakemake_runs import REPO, SLURM_PROFILE, e2e_config, ok, planned_jobs
 
 SITE = REPO / "tests" / "slurm" / "site.yaml"
 COUPLED = "results/runs/fully_coupled/quarter/model2_coarse.nc"

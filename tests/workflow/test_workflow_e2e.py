@@ -1,10 +1,10 @@
 """The workflow end to end (Snakefile, every rule): one small run of the whole DAG, then its contracts.
 
-Configuration: config/config.yaml + config/segment-10mm.yaml (10 mm segment) + tests/data/e2e.yaml (two
+Configuration: config/config.yaml + config/segment-10mm.yaml (10 mm segment) + tests/overlays/e2e.yaml (two
 steps of 20 ms, one mesh level `coarse`, models "1" (no stent) and "2" (10 mm between hole pairs)). The
 overlays are merged here into one file handed to Snakemake, with e2e.yaml's `models` and `mesh.levels`
 replacing the inherited ones: Snakemake deep-merges --configfile overlays, so an overlay cannot drop a model
-or a mesh level (see the header of tests/data/e2e.yaml).
+or a mesh level (see the header of tests/overlays/e2e.yaml).
 
 One module-scoped run (`e2e`), then: the run and study datasets, figures, Table 1, logs and benchmarks;
 a forced figure re-runs alone; a plotting option re-runs only the figure rules; the HTML report holds every
@@ -13,9 +13,7 @@ killed solve resumes from its checkpoint (slow); the solve rule under MPI (2 ran
 """
 from __future__ import annotations
 
-import sys
-
-import base64  # noqa: E402
+import base64
 import io
 import json
 import os
@@ -30,17 +28,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import xarray as xr
-import yaml
 
-from _browser import Browser
-from ureterfsi.config import deep_merge, load_config
+from helpers.browser import Browser
+from helpers.snakemake_runs import REPO, SLURM_PROFILE, e2e_config, job_counts, ok, planned_jobs, snakemake
 
-REPO = Path(__file__).resolve().parent.parent
-CONFIGS = [REPO / "config" / "config.yaml", REPO / "config" / "segment-10mm.yaml",
-           REPO / "tests" / "data" / "e2e.yaml"]
-REPLACED = (("models",), ("mesh", "levels"), ("ladder", "rungs"))      # e2e.yaml mappings that replace instead of merge
-PROFILE = REPO / "workflow" / "profiles" / "default"
-SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm"
 # as root, Open MPI refuses to start without these; more ranks than cores on a 2-core machine
 MPI_LAUNCHER = "mpiexec --allow-run-as-root --oversubscribe"
 
@@ -53,57 +44,6 @@ SERIES = ("outlet_flux", "inlet_flux", "outlet_mean_axial_velocity", "fluid_volu
           "pulse_centre")
 STENT_SERIES = ("stent_max_von_mises", "stent_max_von_mises_x", "stent_max_von_mises_y", "stent_max_von_mises_z")
 STEP_VARS = ("step_time", "step_dt", "newton_iterations", "newton_residual", "min_ale_jacobian", "step_wall_time")
-
-
-def e2e_config(path: Path, **figures) -> dict:
-    """Write the merged e2e configuration to `path` (figures.* overridden by `figures`); return it."""
-    layers = [yaml.safe_load(p.read_text()) for p in CONFIGS]
-    cfg = layers[0]
-    for layer in layers[1:]:
-        cfg = deep_merge(cfg, layer)
-    for keys in REPLACED:
-        src, dst = layers[-1], cfg
-        for k in keys[:-1]:
-            src, dst = src[k], dst[k]
-        dst[keys[-1]] = src[keys[-1]]
-    cfg["figures"].update(figures)
-    load_config(cfg)   # validates (a copy)
-    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-    return cfg
-
-
-def snakemake(workdir: Path, config: Path, *args, profile: Path | None = PROFILE, timeout=900, **popen):
-    """python -m snakemake on the repository's Snakefile in `workdir` with the e2e configuration."""
-    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-           "--configfile", str(config)]
-    if profile is not None:
-        cmd += ["--workflow-profile", str(profile)]
-    cmd += [str(a) for a in args]
-    if popen:
-        return subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                **popen)
-    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
-
-
-def job_counts(text: str) -> dict[str, int]:
-    """{rule: count} from the 'Job stats' table of a Snakemake (dry) run."""
-    out, table = {}, False
-    for line in text.splitlines():
-        if line.startswith("job ") and "count" in line:
-            table = True
-            continue
-        if table:
-            m = re.fullmatch(r"(\S+)\s+(\d+)", line.strip())
-            if m and m.group(1) != "total":
-                out[m.group(1)] = int(m.group(2))
-            elif line.strip().startswith("total"):
-                break
-    return out
-
-
-def ok(run) -> str:
-    assert run.returncode == 0, (run.stdout[-3000:] + "\n" + run.stderr[-3000:])
-    return run.stdout + run.stderr
 
 
 @pytest.fixture(scope="module")
@@ -385,7 +325,7 @@ SHOWN_CAPTION = """(() => {
 
 def test_report_figure_pages_in_a_browser(report, tmp_path):
     """Every result category and every entry of the report, clicked through in headless Chromium (DevTools
-    protocol, tests/_browser.py) as a reader would: the category in the menu, then for each entry of its table
+    protocol, tests/helpers/browser.py) as a reader would: the category in the menu, then for each entry of its table
     the eye button (a figure shows in the content pane: the PNG decoded at its own size and its picture not
     blank; a table is a download link holding the file), the information button (the entry's caption), and
     back to the category by the breadcrumb. Every figure and Table 1 are among the entries visited."""
@@ -425,19 +365,6 @@ def test_report_figure_pages_in_a_browser(report, tmp_path):
     print("report pages visited:", visited)
     seen = {entry for entries in visited.values() for entry in entries}
     assert {f"results/figures/{stem}.png" for stem in FIGURES} | {"results/figures/table1.md"} <= seen, seen
-
-
-def planned_jobs(text: str) -> list[dict]:
-    """The jobs of a dry run (-n -p): rule, output, resources {name: value} and the shell command."""
-    jobs = []
-    for block in re.split(r"^rule ", text, flags=re.M)[1:]:
-        rule, _, rest = block.partition(":\n")
-        fields = dict(line.strip().split(": ", 1) for line in rest.splitlines()
-                      if line.startswith("    ") and ": " in line)
-        shell = re.search(r"^Shell command: (.*)$", rest, re.M)
-        jobs.append({"rule": rule, "output": fields.get("output", ""), "shell": shell.group(1) if shell else None,
-                     "resources": dict(kv.split("=", 1) for kv in fields.get("resources", "").split(", ") if kv)})
-    return jobs
 
 
 def test_slurm_profile_plans_the_jobs(tmp_path):

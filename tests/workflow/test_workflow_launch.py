@@ -14,7 +14,7 @@ from ureterfsi.designs.expand import studies
 from ureterfsi.study.cli import parser
 from ureterfsi.workflow import launch, paths
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SOLVING_RULES = ("solve", "ladder_run", "design_solve", "design_corner_solve")
 MPI = {"tasks": 4, "mpi": "mpiexec", "mumps_out_of_core": 1}
 

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SOFTWARE_LINT = "Specify a conda environment or container for each rule."
 LINT_TITLE = re.compile(r"^    \* (.+?):?$", re.M)
 

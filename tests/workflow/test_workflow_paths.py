@@ -7,7 +7,7 @@ from ureterfsi.designs.expand import corner_run_paths
 from ureterfsi.study.fields import fields_dir
 from ureterfsi.workflow import paths
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_patterns_default_to_the_wildcards_and_fill_them():

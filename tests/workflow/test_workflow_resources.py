@@ -6,7 +6,7 @@ import yaml
 
 from ureterfsi.workflow import resources as r
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 CFG = {"study": {"memory_headroom_mb": 2000,
                  "memory_mb": {"axisymmetric": 1000, "symmetry_factor": {"quarter": 1, "half": 2, "full": 4},

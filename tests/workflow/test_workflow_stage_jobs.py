@@ -13,7 +13,7 @@ from ureterfsi.stability import cases
 from ureterfsi.stability import jobs as stability_jobs
 from ureterfsi.workflow import paths
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
