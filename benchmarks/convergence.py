@@ -1,5 +1,5 @@
 """Convergence tables of the FSI engine against exact solutions (the larger runs behind
-tests/test_verify_exact.py): h, dofs, errors, observed orders and wall times.
+tests/verification/test_verify_exact.py): h, dofs, errors, observed orders and wall times.
 
     .venv/bin/python benchmarks/convergence.py [--quick] [--no-3d]
 

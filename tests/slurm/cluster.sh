@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A single-node SLURM on this machine (Debian 12's slurm-wlm, munge, slurmdbd with mariadb), for the CI test
-# of the SLURM profile (tests/test_slurm_cluster.py). Run as root:
+# of the SLURM profile (tests/workflow/test_slurm_cluster.py). Run as root:
 #   bash tests/slurm/cluster.sh COMMAND...
 # installs the packages if missing, writes slurm.conf, slurmdbd.conf and a munge key under a temporary
 # directory, starts munged, mariadbd, slurmdbd, slurmctld and slurmd, runs COMMAND with SLURM_CONF set, then

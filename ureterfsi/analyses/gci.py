@@ -50,7 +50,7 @@ e_ext21 = 1.71 %, GCI_fine21 = 2.175 % (published 1.53, 6.1685, 1.5 %, 1.7 %, 2.
 not what the paper's own formula gives with its own p and phi_ext: GCI_fine21 = Fs e_a21/(r21^p - 1) =
 Fs (phi_ext21 - phi1)/phi1 = 1.25 x 0.1055/6.063 = 2.175 %. For the other two columns (N = 18000 / 4500 /
 980; a monotone case with p = 0.75 and the oscillatory case) p, phi_ext21, e_a21 and GCI_fine21 agree with
-the published values to the printed digits (tests/test_gci.py).
+the published values to the printed digits (tests/analyses/test_gci.py).
 
 For the study (gci_dataset): the three finest levels of the mesh-convergence dataset, h = (V/N)^(1/3) with
 N the cell count of each level's mesh and V the volume of the whole mesh, which is the same for every level

@@ -6,7 +6,7 @@
 the semi-implicit BDF/extrapolation scheme of Karniadakis, Israeli & Orszag (1991) in ALE form: the mesh velocity
 w^n+1 is the BDF derivative of the prescribed mesh motion, known at the new time, so the residual is affine in the
 step's unknowns (v, p) and one linear system per step replaces Newton's loop. The extrapolation error,
-O(dt^2) in c, keeps the scheme second order (tests/test_linearly_implicit.py).
+O(dt^2) in c, keeps the scheme second order (tests/fsi/test_linearly_implicit.py).
 
 The system A dx = R(x_0) (x_0 the predictor, A the residual's derivative) is solved by GMRES, right-preconditioned
 by the kept LU of an earlier step's A (the problem's linear solver), its products A y the assembled action of the

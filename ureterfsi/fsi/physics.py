@@ -86,7 +86,7 @@ def mooney_rivlin_first_piola(ops, mat: MooneyRivlin, u, pi):
     dW_iso/dF in closed form (I1b, I2b the shifted invariants of mooney_rivlin_isochoric_energy, W1 = dW/dI1b,
     W2 = dW/dI2b, dI1/dF = 2F, dI2/dF = 2(I1 F - F C), dJ/dF = J F^-T):
         dW_iso/dF = W1 J^(-2/3) (2F - 2/3 I1 F^-T) + W2 J^(-4/3) (2(I1 F - F C) - 4/3 I2 F^-T),
-    the energy's derivative (tests/test_physics_blocks.py) at a quarter of its kernel's cost."""
+    the energy's derivative (tests/fsi/test_physics_blocks.py) at a quarter of its kernel's cost."""
     F = deformation_gradient(ops, u)
     C, J, I1, I2 = invariants(ops, F)
     F_invT = ufl.inv(F).T

@@ -1,5 +1,5 @@
 """A rigid axisymmetric pipe with open ends: the verification scene of the lumped end conditions
-(fsi.end_conditions; tests/test_end_conditions.py, benchmarks/end_conditions.py).
+(fsi.end_conditions; tests/fsi/test_end_conditions.py, benchmarks/end_conditions.py).
 
 Quasi-steady Poiseuille flow through it has the resistance R = dp/Q = 8 mu L / (pi a^4); a compliance C upstream
 then relaxes as p(t) = p_out + (p(0) - p_out) exp(-t / (R C)).

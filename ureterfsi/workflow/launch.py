@@ -2,7 +2,7 @@
 design_escalated_solve, design_corner_solve): `python -m ureterfsi.study` with the run's arguments, behind the MPI
 launcher for several tasks (resources.launcher), with the job's out-of-core factorisation and checkpoint, its
 output into the rule's log. The rules describe their solve (SolveJob) and take the command from here, so that no
-option of one rule's solve drifts from another's (tests/test_workflow_launch.py builds every rule's command and
+option of one rule's solve drifts from another's (tests/workflow/test_workflow_launch.py builds every rule's command and
 refuses a rule that spells its own)."""
 from __future__ import annotations
 

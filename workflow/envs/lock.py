@@ -3,7 +3,7 @@
 Run by workflow/envs/lock.sh with the python of a clean venv built as workflow/setup.sh builds it. The
 closure follows each installed distribution's Requires-Dist (markers evaluated here); distributions that
 Debian's site-packages provide are pinned to Debian's version and marked "# Debian". The header holds the
-sha256 of requirements.txt + constraints.txt, which setup.sh and tests/test_environment.py check.
+sha256 of requirements.txt + constraints.txt, which setup.sh and tests/workflow/test_environment.py check.
 """
 from __future__ import annotations
 

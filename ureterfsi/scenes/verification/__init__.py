@@ -1,5 +1,5 @@
-"""The verification problems: exact solutions the engine is checked against (tests/test_verify_exact.py,
-tests/test_solid_loads.py, benchmarks/convergence.py; the calibration uses the tube's exact pressure).
+"""The verification problems: exact solutions the engine is checked against (tests/verification/test_verify_exact.py,
+tests/verification/test_solid_loads.py, benchmarks/convergence.py; the calibration uses the tube's exact pressure).
 
 exact      annular Poiseuille flow (and its wall shear stress), the inflated Mooney-Rivlin tube, a bar and a confined column under their weight
 norms      error norms, observed orders of convergence, the integrals and counts they are made of

@@ -1,0 +1,65 @@
+"""ureterfsi.workflow.resources: the memory, out-of-core, priority and launcher decisions (no snakemake)."""
+from pathlib import Path
+
+import pytest
+import yaml
+
+from ureterfsi.workflow import resources as r
+
+REPO = Path(__file__).resolve().parents[2]
+
+CFG = {"study": {"memory_headroom_mb": 2000,
+                 "memory_mb": {"axisymmetric": 1000, "symmetry_factor": {"quarter": 1, "half": 2, "full": 4},
+                               "one_way": {"coarse": 5500, "medium": 7000},
+                               "fully_coupled": {"coarse": 4000, "medium": 17000}}},
+       "mesh": {"levels": {"coarse": {"size_factor": 2.0}, "medium": {"size_factor": 1.4},
+                           "fine": {"size_factor": 1.0}}}}
+
+
+def test_memory_reservation_by_rung_symmetry_and_level():
+    assert r.solve_mem_mb(CFG, "fully_coupled", "axisymmetric", "fine") == 1000
+    assert r.solve_mem_mb(CFG, "one_way", "quarter", "medium") == 7000
+    assert r.solve_mem_mb(CFG, "fully_coupled", "half", "coarse") == 8000
+    assert r.solve_mem_mb(CFG, "one_way", "quarter", "fine") == 7000          # no entry: the largest
+    assert r.local_memory_budget(CFG, 24000) == 22000
+
+
+def test_out_of_core_only_for_a_fully_coupled_solve_over_the_budget():
+    assert r.out_of_core(CFG, "fully_coupled", "quarter", "medium", 16000) == 1
+    assert r.out_of_core(CFG, "fully_coupled", "quarter", "medium", 17000) == 0
+    assert r.out_of_core(CFG, "fully_coupled", "quarter", "medium", None) == 0   # a cluster run: no budget
+    assert r.out_of_core(CFG, "one_way", "quarter", "medium", 100) == 0
+
+
+def test_finer_levels_first():
+    assert [r.level_priority(CFG, lv) for lv in ("fine", "medium", "coarse")] == [2, 1, 0]
+
+
+@pytest.mark.parametrize("fidelity, symmetry, tasks, expected", [
+    ("fully_coupled", "quarter", 4, "mpiexec -n 4 py"),
+    ("fully_coupled", "quarter", 1, "py"),
+    ("fully_coupled", "axisymmetric", 4, "py"),
+    ("one_way", "quarter", 4, "py"),
+])
+def test_launcher(fidelity, symmetry, tasks, expected):
+    mpi = r.mpi_resource(fidelity, symmetry)
+    assert r.launcher(fidelity, symmetry, tasks, mpi or "mpiexec", python="py") == expected
+    assert (mpi == "mpiexec") == (fidelity == "fully_coupled" and symmetry != "axisymmetric")
+
+
+def test_the_shipped_configuration_reserves_what_its_table_says():
+    from ureterfsi.config import load_config_files
+    cfg = load_config_files([REPO / "config" / "config.yaml"])
+    table = yaml.safe_load((REPO / "config" / "config.yaml").read_text())["study"]["memory_mb"]
+    assert r.solve_mem_mb(cfg, "one_way", "quarter", "coarse") == int(table["one_way"]["coarse"])
+
+
+def test_a_solve_larger_than_a_node_is_refused_unless_it_can_go_out_of_core(cfg):
+    one_way = r.solve_mem_mb(cfg, "one_way", "quarter", "fine")
+    assert r.node_refusal(cfg, "one_way", "quarter", "fine", None) == ""               # node size unknown
+    assert r.node_refusal(cfg, "one_way", "quarter", "fine", one_way) == ""            # fits exactly
+    why = r.node_refusal(cfg, "one_way", "quarter", "fine", one_way - 1)
+    assert why == (f"needs {one_way} MiB (study.memory_mb), more than a node has "
+                   f"(cluster.mem_mb_per_node: {one_way - 1})")
+    coupled = r.solve_mem_mb(cfg, "fully_coupled", "quarter", "fine")
+    assert r.node_refusal(cfg, "fully_coupled", "quarter", "fine", coupled - 1) == ""  # factors on disk instead
