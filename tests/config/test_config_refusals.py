@@ -417,6 +417,12 @@ SHIPPED = [
     ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/e2e.yaml", "tests/overlays/ends-mini.yaml"],
     ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/ladder-mini.yaml",
      "tests/overlays/ladder-mini-passage.yaml"],
+    ["config/config.yaml", "config/designs/occlusion_holes.yaml"],
+    ["config/config.yaml", "config/designs/stricture_holes.yaml"],
+    ["config/config.yaml", "config/designs/voiding_reflux.yaml"],
+    ["config/config.yaml", "config/designs/encrustation.yaml"],
+    ["config/config.yaml", "config/segment-10mm.yaml", "tests/overlays/e2e.yaml",
+     "tests/overlays/occlusion-holes-mini.yaml"],
 ]
 
 
