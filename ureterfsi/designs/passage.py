@@ -25,19 +25,25 @@ REFERENCE_SCALARS = ("peak_outlet_flux", "mean_outlet_flux", "backflow_volume", 
                      "reflux_volume_annulus", "wall_time")
 
 
-def _trapz(y: np.ndarray, t: np.ndarray) -> float:
+def trapezoid(y: np.ndarray, t: np.ndarray) -> float:
+    """int y dt over the recorded times (trapezoidal rule)."""
     return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
 
 
+def lumen_share(q: np.ndarray, lumen: np.ndarray, t: np.ndarray) -> float:
+    """integral |Q_lumen| dt / (integral |Q_lumen| dt + integral |Q - Q_lumen| dt) of a flux Q and its part inside
+    the stent, over the times t; NaN without flow."""
+    inside, outside = trapezoid(np.abs(lumen), t), trapezoid(np.abs(q - lumen), t)
+    return inside / (inside + outside) if inside + outside > 0 else np.nan
+
+
 def obstruction_lumen_fraction(run) -> float:
-    """integral |Q_lumen| dt / (integral |Q_lumen| dt + integral |Q - Q_lumen| dt) through the plane of the
-    obstruction's centre (the run's obstruction_flux, obstruction_lumen_flux); NaN without them or without flow."""
+    """lumen_share through the plane of the obstruction's centre (the run's obstruction_flux, obstruction_lumen_flux);
+    NaN without them or without flow."""
     if "obstruction_flux" not in run:
         return np.nan
-    t = run["time"].values.astype(float)
     q, lumen = (run[k].values.astype(float) for k in OBSTRUCTION_SERIES)
-    inside, outside = _trapz(np.abs(lumen), t), _trapz(np.abs(q - lumen), t)
-    return inside / (inside + outside) if inside + outside > 0 else np.nan
+    return lumen_share(q, lumen, run["time"].values.astype(float))
 
 
 def obstruction_variables(points: list, hole_z: np.ndarray) -> tuple[dict, dict]:

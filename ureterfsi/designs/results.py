@@ -16,8 +16,8 @@ from ureterfsi.designs import rung_check as rc
 from ureterfsi.data.checked import Contract, open_netcdf
 from ureterfsi.designs.expand import studies
 from ureterfsi.designs.space import Study, base_values, point_id
-from ureterfsi.designs.passage import (OBSTRUCTION_SERIES, escalated_points, obstruction_lumen_fraction,
-                                       obstruction_variables, reference_variables, rung_variable)
+from ureterfsi.designs.passage import (OBSTRUCTION_SERIES, escalated_points, lumen_share, obstruction_lumen_fraction,
+                                       obstruction_variables, reference_variables, rung_variable, trapezoid)
 from ureterfsi.mesh.geometry import SYMMETRY_FRACTION
 from ureterfsi.data.cf import DESIGN_PARAMETERS, VARIABLES, reference_metadata, rung_check_metadata
 from ureterfsi.data.provenance import provenance_attrs
@@ -43,10 +43,6 @@ SERIES = ("outlet_flux", "inlet_flux", "outlet_lumen_flux", "stent_max_von_mises
           "pressure_drop") + OBSTRUCTION_SERIES
 
 
-def _trapz(y: np.ndarray, t: np.ndarray) -> float:
-    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
-
-
 def hole_mirror_weights(run) -> np.ndarray:
     """Per recorded hole, the holes of the full model it stands for: 2 where its opposite hole (same z and axis,
     other side) lies outside the symmetric model (its mirror image, the same flow), else 1."""
@@ -70,7 +66,7 @@ def pressure_drop_scalars(run) -> dict:
     """Peak |p_in - p_out| (the pulse drives the urine both ways, so a signed mean partly cancels) and its
     signed time mean (the net drop)."""
     t, dp = run["time"].values.astype(float), pressure_drop(run)
-    return {"peak_pressure_drop": float(np.max(np.abs(dp))), "mean_pressure_drop": _trapz(dp, t) / (t[-1] - t[0])}
+    return {"peak_pressure_drop": float(np.max(np.abs(dp))), "mean_pressure_drop": trapezoid(dp, t) / (t[-1] - t[0])}
 
 
 def end_condition_scalars(run) -> dict:
@@ -90,18 +86,14 @@ def point_scalars(run) -> dict:
     q = run["outlet_flux"].values.astype(float)
     hole = run["hole_flux"].values.astype(float) if "hole_flux" in run else np.zeros((0, t.size))   # (hole, time)
     mirror = hole_mirror_weights(run)
-    exchange = np.array([_trapz(np.abs(h), t) for h in hole])
-    if "outlet_lumen_flux" in run:
-        lumen = run["outlet_lumen_flux"].values.astype(float)
-        inside, outside = _trapz(np.abs(lumen), t), _trapz(np.abs(q - lumen), t)
-        lumen_fraction = inside / (inside + outside) if inside + outside > 0 else np.nan
-    else:
-        lumen_fraction = np.nan
-    return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": _trapz(q, t) / (t[-1] - t[0]),
-            "backflow_volume": _trapz(np.maximum(-q, 0.0), t),
+    exchange = np.array([trapezoid(np.abs(h), t) for h in hole])
+    lumen_fraction = (lumen_share(q, run["outlet_lumen_flux"].values.astype(float), t) if "outlet_lumen_flux" in run
+                      else np.nan)
+    return {"peak_outlet_flux": float(q.max()), "mean_outlet_flux": trapezoid(q, t) / (t[-1] - t[0]),
+            "backflow_volume": trapezoid(np.maximum(-q, 0.0), t),
             "peak_hole_flux": np.abs(hole).max(axis=1) if hole.size else np.zeros(0),
             "hole_exchange_volume": exchange,
-            "hole_exchange_fraction": float(np.sum(mirror * exchange)) / _trapz(np.abs(q), t),
+            "hole_exchange_fraction": float(np.sum(mirror * exchange)) / trapezoid(np.abs(q), t),
             "stent_lumen_fraction": lumen_fraction, "obstruction_lumen_fraction": obstruction_lumen_fraction(run),
             "peak_stent_von_mises": float(run["stent_max_von_mises"].max()) if "stent_max_von_mises" in run else np.nan,
             "peak_wall_displacement": float(run["max_wall_displacement"].max()),
@@ -180,7 +172,7 @@ def error_scales(run) -> dict:
     max |Q_out| for the peak and the mean outlet flow, integral |Q_out| dt for the backflow volume."""
     t, q = run["time"].values.astype(float), run["outlet_flux"].values.astype(float)
     peak = float(np.max(np.abs(q)))
-    return {"peak_outlet_flux": peak, "mean_outlet_flux": peak, "backflow_volume": _trapz(np.abs(q), t)}
+    return {"peak_outlet_flux": peak, "mean_outlet_flux": peak, "backflow_volume": trapezoid(np.abs(q), t)}
 
 
 def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
