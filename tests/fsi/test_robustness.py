@@ -116,6 +116,8 @@ def test_crushing_load_inverts_the_fluid_mesh():
     assert jmin == pb.min_ale_jacobian() == info.value.min_jacobian
     X = pb.mesh.geometry.x
     assert np.min(np.linalg.norm(X - np.asarray(xyz), axis=1)) < 1e-12
+    # the diagnosis names that vertex
+    assert f"at the reference point ({', '.join(f'{c:.4g}' for c in xyz)}) m" in msg
 
 
 # ---------------------------------------------------------------------------------------------

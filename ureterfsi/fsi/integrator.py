@@ -313,8 +313,10 @@ class TimeIntegrator:
                      "" if krylov is None else f"  krylov={krylov - krylov0:3d}", history[-1],
                      history[0], jmin, wall)
             if jmin <= s.min_ale_jacobian:
+                _, where = pb.min_ale_jacobian_at()
                 raise MeshInversion(f"ALE mesh inverted at t={pb.time:.6g} s (step {step}): minimum "
-                                    f"Jacobian {jmin:.3e} <= {s.min_ale_jacobian}; refine the mesh near "
+                                    f"Jacobian {jmin:.3e} <= {s.min_ale_jacobian} at the reference point "
+                                    f"({', '.join(f'{c:.4g}' for c in where)}) m; refine the mesh near "
                                     f"the moving interface, stiffen the mesh motion or reduce the load",
                                     pb.time, jmin)
             for obs in self.observers:

@@ -50,12 +50,22 @@ def peristaltic_pressure(peristalsis: dict, z, t):
             * exp(-((z - zc) ** 2) / (2.0 * sigma**2)))
 
 
-def peristaltic_traction(peristalsis: dict, axial_component: int):
-    """SurfaceLoad callable: dead load along the reference outward normal, P N = F_A N (eq. 21)."""
+def load_direction(peristalsis: dict, N, axial_component: int):
+    """The dead load's direction: the reference outward normal N (eq. 21; peristalsis.along "normal"), or its radial
+    part N - (N . e_z) e_z ("radial"), which leaves the flanks of a narrowed wall without an axial push; the two
+    agree on a straight tube."""
     sign = 1.0 if peristalsis["direction"] == "outward" else -1.0
+    if peristalsis["along"] == "normal":
+        return sign * N
+    return sign * ufl.as_vector([0.0 if i == axial_component else N[i] for i in range(N.ufl_shape[0])])
+
+
+def peristaltic_traction(peristalsis: dict, axial_component: int):
+    """SurfaceLoad callable: dead load P d(N) (eq. 21: P N = F_A N) with d the load_direction."""
 
     def traction(X, t, N):
-        return sign * peristaltic_pressure(peristalsis, X[axial_component], t) * N
+        return peristaltic_pressure(peristalsis, X[axial_component], t) * load_direction(peristalsis, N,
+                                                                                          axial_component)
 
     return traction
 

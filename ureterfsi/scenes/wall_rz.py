@@ -22,7 +22,7 @@ from ..fsi import (DirichletCondition, FollowerPressure, MonolithicFSI, MooneyRi
                    SolidRegion, SolverOptions, SurfaceLoad)
 from ..fsi.tagging import tag_cells, tag_facets
 from ureterfsi.mesh.geometry import Stricture
-from .ureter import peristaltic_traction, pulse_sigma
+from .ureter import load_direction, peristaltic_traction, pulse_sigma
 
 log = logging.getLogger("ureterfsi.scenes.wall_rz")
 
@@ -82,13 +82,12 @@ class WallModel:
         # the five coefficients as UFL products (scaled without recompiling); kappa stays fixed
         mat = wall_material(cfg, self.coefficient_scale)
         per = cfg["peristalsis"]
-        sign = 1.0 if per["direction"] == "outward" else -1.0
         amp, sigma = per["peak_traction"], pulse_sigma(per)
         scale, centre = self.load_scale, self.centre
         self.travelling = travelling and load == "pulse"
         if load == "uniform":
             def traction(X, t, N):
-                return scale * sign * amp * N
+                return scale * amp * load_direction(per, N, 1)
         elif self.travelling:
             moving = peristaltic_traction(per, axial_component=1)
 
@@ -96,7 +95,8 @@ class WallModel:
                 return scale * moving(X, t, N)
         else:
             def traction(X, t, N):
-                return scale * sign * amp * ufl.exp(-((X[1] - centre) ** 2) / (2.0 * sigma**2)) * N
+                return (scale * amp * ufl.exp(-((X[1] - centre) ** 2) / (2.0 * sigma**2))
+                        * load_direction(per, N, 1))
 
         if ends == "fixed":
             dirichlet = [DirichletCondition("displacement", [tags.URETER_ENDS]),
