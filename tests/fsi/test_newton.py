@@ -87,6 +87,28 @@ def test_modified_newton_keeps_the_jacobian_while_it_contracts():
     assert fresh[0] and not all(fresh)
 
 
+def test_a_residual_within_atol_keeps_the_factorisation():
+    """Past ||R|| <= newton_atol only the increment test goes on, and the residual's ratio there (round-off on a real
+    system) says nothing of the factorisation: a correction with half Newton's step contracts by 1/2, above
+    reuse_contraction, so it is refactorised at every iteration until ||R|| <= atol and never after."""
+    toy = Toy(SolverOptions(reuse_jacobian=True, reuse_contraction=0.4, newton_rtol=1e-30, newton_atol=1e-6,
+                            newton_field_rtol=1e-12, newton_max_iterations=80), start=1.4)
+
+    def half_step(fresh, rtol):
+        toy.calls.append((fresh, rtol))
+        if fresh:
+            toy.jacobian = 6.0 * toy.x.x.array ** 2
+        toy.dx.array[:] = toy.b.array / toy.jacobian
+
+    toy.correction = half_step
+    _, history = toy.solve()
+    np.testing.assert_allclose(toy.x.x.array, np.cbrt(toy.c), rtol=1e-9)   # its increments within 1e-10
+    fresh = [f for f, _ in toy.calls]
+    first = next(k for k, r in enumerate(history) if r <= 1e-6)
+    assert 5 < first < len(fresh) - 5
+    assert all(fresh[1:first]) and not any(fresh[first:])
+
+
 def test_failures_raise_newton_divergence_with_the_history():
     toy = Toy(SolverOptions())
     toy.correction = lambda fresh, rtol: "linear solve failed (a reason)"
