@@ -54,3 +54,11 @@ def test_a_checkpoint_without_its_record_is_named(tmp_path):
     np.savez(ckpt, meta=np.array(json.dumps({"step": 150})))
     with pytest.raises(BadFile, match=f"{ckpt.name}.*checkpoint without its meta record"):
         status.study_status(cfg, "s", tmp_path)
+
+
+def test_a_corrupt_run_file_is_named(tmp_path):
+    cfg, st, _ = study_tree(tmp_path)
+    bad = tmp_path / paths.design_run("s", st.points[0].id)
+    bad.write_bytes(b"not netCDF")
+    with pytest.raises(BadFile, match=f"{bad.name}.*not a netCDF file"):
+        status.study_status(cfg, "s", tmp_path)

@@ -129,9 +129,10 @@ RUNG_CHECK = Contract("rung check", attrs=("rung_check",),
                       variables=("rung_error", "max_rung_error", "rung_tolerance", "corner_within_tolerance"))
 
 
-def _corner_run(path) -> xr.Dataset:
-    """A corner's run file: a run (DESIGN_RUN), or the record of a solve that failed (ureterfsi.study.run.write_failed_run)."""
-    ds = open_netcdf(path, Contract("corner run file"))
+def read_run(path) -> xr.Dataset:
+    """A design solve's run file (a point's, a reference's or a corner's), checked: a run (DESIGN_RUN), or the record
+    of a solve that failed (attribute solve_failed, ureterfsi.study.run.write_failed_run)."""
+    ds = open_netcdf(path, Contract("design run file"))
     return ds if "solve_failed" in ds.attrs else open_netcdf(path, DESIGN_RUN)
 
 
@@ -188,7 +189,7 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     error, wall = np.full((len(ch.corners), len(QUANTITIES)), np.nan), np.full((len(ch.corners), 2), np.nan)
     failed = {}
     for i, c in enumerate(ch.corners):
-        runs = [_corner_run(path) for path in corner_paths[c.id]]
+        runs = [read_run(path) for path in corner_paths[c.id]]
         failed.update({c.id: r.attrs["solve_failed"] for r in runs if "solve_failed" in r.attrs})
         if c.id in failed:
             continue

@@ -13,12 +13,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from ureterfsi.config import load_config_files
 from ureterfsi.data.checked import BadFile
 from ureterfsi.designs import expand
-from ureterfsi.designs.results import point_scalars
+from ureterfsi.designs.results import point_scalars, read_run
 from ureterfsi.designs.space import Study
 from ureterfsi.workflow import paths
 
@@ -56,15 +55,14 @@ def entry(st: Study, point, label: str, root: Path) -> Entry:
     """The state of one point (or reference) of study `st` from its run file and checkpoint under `root`."""
     path = root / paths.design_run(st.name, point.id)
     if path.exists():
-        with xr.open_dataset(path) as run:
-            if "solve_failed" in run.attrs:
-                return Entry(point.id, label, point.rung, f"failed: {run.attrs['solve_failed']}", {}, np.nan)
-            scalars = point_scalars(run.load())
-            cpu = float(np.sum(json.loads(run.attrs["cpu_time_s_per_rank"]))) if "cpu_time_s_per_rank" in run.attrs \
-                else np.nan
-        return Entry(point.id, label, point.rung, "done", scalars, cpu)
+        run = read_run(path)
+        if "solve_failed" in run.attrs:
+            return Entry(point.id, label, point.rung, f"failed: {run.attrs['solve_failed']}", {}, np.nan)
+        cpu = json.loads(run.attrs["cpu_time_s_per_rank"]) if "cpu_time_s_per_rank" in run.attrs else [np.nan]
+        return Entry(point.id, label, point.rung, "done", point_scalars(run), float(np.sum(cpu)))
     t = checkpoint_time(st.name, point.id, root)
-    return Entry(point.id, label, point.rung, "no run file, no checkpoint" if t is None else f"resumes at t = {t:g} s", {}, np.nan)
+    state = "no run file, no checkpoint" if t is None else f"resumes at t = {t:g} s"
+    return Entry(point.id, label, point.rung, state, {}, np.nan)
 
 
 def study_status(cfg: dict, name: str, root: Path = Path(".")) -> list[Entry]:

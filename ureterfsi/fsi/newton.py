@@ -91,8 +91,7 @@ class Newton:
         Converged: ||R_k|| <= newton_atol or ||R_k|| <= newton_rtol ||R_0|| (k > 0), and every field's last
         increment within newton_field_rtol; stagnated (accepted): every field's increment within newton_stol.
         A Jacobian is kept (reuse_jacobian) while ||R_k|| / ||R_k-1|| < reuse_contraction or ||R_k|| <= newton_atol.
-        Failure:
-        NewtonDivergence with the history."""
+        Failure: NewtonDivergence with the history."""
         o = self.options
         x, dx = self.x, self.dx
         history = []
