@@ -14,10 +14,6 @@ from ureterfsi.fsi.options import SolverOptions
     ({"mesh_jacobian_stiffening": 1.0, "coupling_scheme": "partitioned"}, {}, "mesh_jacobian_stiffening > 0"),
     ({"coupling_scheme": "partitioned"}, {"solid": False}, "coupling_scheme 'partitioned' splits a coupled scene"),
     ({"predictor": "nonsense"}, {}, "predictor .*, got .nonsense."),
-    ({"stale_factor": "gmres"}, {"solid": False}, "stale_factor 'gmres' keeps the flow-block LU"),
-    ({"stale_factor": "gmres", "mesh_motion_coupling": "segregated", "linear_solver": "fieldsplit"}, {"solid": False},
-     "stale_factor 'gmres' keeps the flow-block LU"),
-    ({"stale_factor": "again"}, {}, "stale_factor .*, got .again."),
 ])
 def test_options_that_do_not_go_together_are_refused(options, scene, message):
     with pytest.raises(ValueError, match=message):

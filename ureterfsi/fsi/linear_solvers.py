@@ -1,8 +1,7 @@
 """Linear solvers of the engine's Newton system: strategies of MonolithicFSI chosen by SolverOptions.linear_solver.
 
 `WholeSystemLU` (a direct package: LU of the whole system), `FlowBlockLU` (a direct package in a fluid-alone
-scene: LU of the velocity-pressure block), `FlowBlockGMRES` (the same LU kept as GMRES's preconditioner while the
-Jacobian moves on: SolverOptions.stale_factor "gmres"), `SchurFieldsplit` (`fieldsplit`, fluid-alone: GMRES with a Schur
+scene: LU of the velocity-pressure block), `SchurFieldsplit` (`fieldsplit`, fluid-alone: GMRES with a Schur
 block preconditioner) and, for coupled scenes,
 
 `BlockGaussSeidel` (`SolverOptions.linear_solver: block_gauss_seidel`): GMRES, right-preconditioned by one
@@ -226,78 +225,6 @@ class FlowBlockLU(LinearSolver):
 
     def failure_detail(self) -> str:
         return mumps_status(self.factor_matrix()) if self.package == "mumps" else ""
-
-
-class FlowBlockGMRES(FlowBlockLU):
-    """SolverOptions.stale_factor "gmres": GMRES on the current Jacobian of a fluid-alone Newton system,
-    right-preconditioned by FlowBlockLU's PCFieldSplit, the flow block's LU kept across fresh Jacobians (of any
-    b0/dt) until a solve needs more than `refactorise_iterations` GMRES iterations (refactorised at the next fresh
-    Jacobian); a solve GMRES cannot finish within twice that is repeated at once on a fresh LU. The iteration runs
-    on the current Jacobian, so the kept factor changes the iteration count, not the Newton iterate beyond GMRES's
-    tolerance (its residual is the true one). `counters` (in place): krylov_iterations, flow_factorisations
-    (from the factor's PETSc object state), flow_lu_retries (solves repeated on a fresh LU); `timings`: flow_factorise (the blocks' extraction and a due LU), krylov
-    (GMRES, and the LU of a solve repeated at once)."""
-
-    def __init__(self, ksp: PETSc.KSP, prefix: str, package: str, splits: list, refactorise_iterations: int,
-                 counters: dict, timings: dict, mumps: Mumps = Mumps()):
-        super().__init__(ksp, prefix, package, splits, counters, mumps)
-        cap = 2 * max(refactorise_iterations, 1)
-        set_options(prefix, {"ksp_type": "gmres", "ksp_gmres_restart": cap, "ksp_pc_side": "right",
-                             "ksp_norm_type": "unpreconditioned", "ksp_atol": 0.0, "ksp_max_it": cap})
-        self.refactorise_iterations = refactorise_iterations
-        counters |= {"krylov_iterations": 0, "flow_factorisations": 0, "flow_lu_retries": 0}
-        self.timings = timings
-        timings |= {"flow_factorise": 0.0, "krylov": 0.0}
-        self._refresh = True              # refactorise the flow block at the next fresh Jacobian
-        self._state = None                # PETSc object state of the flow factor after the last solve
-
-    def _flow(self) -> PETSc.KSP:
-        return self.ksp.getPC().getFieldSplitSubKSP()[1]
-
-    def operator_changed(self):
-        """A fresh Jacobian: the flow block keeps its LU unless it is due for refactorisation."""
-        if self._state is not None:
-            self._flow().getPC().setReusePreconditioner(not self._refresh)
-
-    def invalidate(self):
-        """Refactorise the flow block at the next fresh Jacobian."""
-        self._refresh = True
-        if self._state is not None:
-            self._flow().getPC().setReusePreconditioner(False)
-
-    def _count_factorisation(self):
-        """A flow factor whose PETSc object state changed since the last look has been refactorised."""
-        state = self._flow().getPC().getFactorMatrix().stateGet()
-        if state != self._state:
-            self.counters["flow_factorisations"] += 1
-            self._refresh = False
-        self._state = state
-
-    def solve(self, b: PETSc.Vec, x: PETSc.Vec, rtol: float):
-        """x = A^-1 b to GMRES's relative residual rtol (with a fresh LU if the kept one cannot reach it)."""
-        self.ksp.setTolerances(rtol=rtol)
-        t0 = time.perf_counter()
-        self.ksp.setUp()                  # the blocks of a changed operator; the flow LU unless it is kept
-        self._flow().setUp()
-        self.timings["flow_factorise"] += time.perf_counter() - t0
-        self._count_factorisation()
-        for fresh in (False, True):
-            t0 = time.perf_counter()
-            self.ksp.solve(b, x)          # after invalidate(): the flow block's PC refactorises in here
-            self.timings["krylov"] += time.perf_counter() - t0
-            self._count_factorisation()
-            its = self.ksp.getIterationNumber()
-            self.counters["krylov_iterations"] += its
-            if self.ksp.getConvergedReason() > 0 or fresh:
-                break
-            self.invalidate()
-            self.counters["flow_lu_retries"] += 1
-        if its > self.refactorise_iterations:
-            self._refresh = True
-
-    def failure_detail(self) -> str:
-        return (f" after {self.ksp.getIterationNumber()} GMRES iterations on a fresh flow LU, residual "
-                f"{self.ksp.getResidualNorm():.3e}" + super().failure_detail())
 
 
 class SchurFieldsplit(LinearSolver):

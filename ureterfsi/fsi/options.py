@@ -3,14 +3,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .linear_solvers import DIRECT, KRYLOV, MUMPS_WORKSPACE_PERCENT, Mumps
+from .linear_solvers import KRYLOV, MUMPS_WORKSPACE_PERCENT, Mumps
 
 # the values of the options that name a choice
 CHOICES = {"mesh_motion_coupling": ("monolithic", "segregated"), "predictor": ("quadratic", "linear", "constant"),
            "solid_block": ("condensed", "whole"), "coupling_scheme": ("monolithic", "partitioned"),
            "sweep_convergence": ("contraction", "residual"), "krylov_forcing": ("fixed", "eisenstat_walker"),
-           "jacobian_sparsity": ("couplings", "mixed_element"), "urine_step": ("newton", "linearly_implicit"),
-           "stale_factor": ("refactorise", "gmres")}
+           "jacobian_sparsity": ("couplings", "mixed_element"), "urine_step": ("newton", "linearly_implicit")}
 
 
 @dataclass
@@ -74,10 +73,6 @@ class SolverOptions:
     # a fluid-alone step (segregated): "newton" on the full residual, or "linearly_implicit": BDF2 with the convecting
     # velocity extrapolated, one linear system per step (fsi.linearly_implicit; Newton its fallback)
     urine_step: str = "newton"
-    # a fluid-alone Newton (segregated, a direct package) whose kept flow-block LU no longer contracts (reuse_contraction)
-    # or is of another b0/dt: "refactorise" it (modified Newton), or "gmres": keep it as GMRES's preconditioner on the
-    # current Jacobian until a solve needs more than krylov_refactorise_iterations (linear_solvers.FlowBlockGMRES)
-    stale_factor: str = "refactorise"
     # a coupled scene's step: "monolithic" (Newton on the whole system, `linear_solver`) or "partitioned" (block
     # Gauss-Seidel sweeps solid -> mesh -> flow on the same residual, a kept LU per block: fsi.partitioned)
     coupling_scheme: str = "monolithic"
@@ -138,10 +133,6 @@ class SolverOptions:
         if self.linear_solver == "fieldsplit" and not segregated:
             raise ValueError("linear_solver 'fieldsplit' preconditions the fluid-alone (v, p) system: it needs "
                              "mesh_motion_coupling 'segregated'; use a direct solver for coupled FSI")
-        if self.stale_factor == "gmres" and (not segregated or self.linear_solver not in DIRECT
-                                             or self.urine_step != "newton"):
-            raise ValueError("stale_factor 'gmres' keeps the flow-block LU of a fluid-alone Newton: it needs "
-                             "mesh_motion_coupling 'segregated', a direct linear_solver and urine_step 'newton'")
         if self.linear_solver in KRYLOV and segregated:
             raise ValueError(f"linear_solver {self.linear_solver!r} preconditions the coupled FSI system: it needs "
                              "mesh_motion_coupling 'monolithic'")

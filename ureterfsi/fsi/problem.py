@@ -34,8 +34,8 @@ from .dofs import DofLayout
 from .end_conditions import STEADY_PASSES, EndConditions
 from .history import HistoryMethods
 from .linearly_implicit import LinearlyImplicitStep
-from .linear_solvers import (BlockGaussSeidel, FlowBlockGMRES, FlowBlockLU, LinearSolver, SchurFieldsplit,
-                             WholeSystemLU, forget_options, owner_prefix)
+from .linear_solvers import (BlockGaussSeidel, FlowBlockLU, LinearSolver, SchurFieldsplit, WholeSystemLU,
+                             forget_options, owner_prefix)
 from .materials import MooneyRivlin
 from .mesh_motion import MeshMotionMethods, cell_stiffness
 from .newton import Newton, NewtonDivergence
@@ -262,8 +262,8 @@ class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
         return np.unique(np.concatenate([ct.find(t) for t in tags] or [np.zeros(0, np.int32)])).astype(np.int32)
 
     def _linear_solver(self, prefix) -> LinearSolver:
-        """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block (kept as
-        GMRES's preconditioner under stale_factor "gmres") (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
+        """The strategy of SolverOptions.linear_solver: GMRES + Schur fieldsplit or LU of the flow block
+        (fluid-alone, segregated), block Gauss-Seidel GMRES (coupled), or LU of the whole system."""
         o = self.options
         if o.linear_solver == "fieldsplit":
             splits = self.layout.field_is({"momentum": [f for f in self.field_names if f != "pressure"],
@@ -278,9 +278,6 @@ class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
         if self.segregated:
             splits = self.layout.field_is({"mirror": ["displacement"],
                                            "flow": [f for f in self.field_names if f != "displacement"]})
-            if o.stale_factor == "gmres":
-                return FlowBlockGMRES(self.ksp, prefix, o.linear_solver, splits, o.krylov_refactorise_iterations,
-                                      self.counters, self.timings, o.mumps())
             return FlowBlockLU(self.ksp, prefix, o.linear_solver, splits, self.counters, o.mumps())
         return WholeSystemLU(self.ksp, prefix, o.linear_solver, self.counters, o.mumps())
 
