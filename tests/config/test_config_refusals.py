@@ -245,6 +245,8 @@ CATALOGUE = [
     ("newton_atol_negative", "solver: {newton_atol: -1.0e-10}\n", "solver.newton_atol", "must be > 0, got -1e-10"),
     ("krylov_rtol_zero", "solver: {krylov_rtol: 0.0}\n", "solver.krylov_rtol", "must be > 0, got 0"),
     ("reuse_contraction_one", "solver: {reuse_contraction: 1.0}\n", "solver.reuse_contraction", "must be < 1, got 1"),
+    ("one_way_reuse_contraction_zero", "solver: {one_way_reuse_contraction: 0.0}\n", "solver.one_way_reuse_contraction",
+     "must be > 0, got 0"),
     ("newton_iterations_huge", "solver: {newton_max_iterations: 1000}\n", "solver.newton_max_iterations",
      "outside the plausible range [1, 200]"),
     ("step_halvings_negative", "solver: {max_step_halvings: -1}\n", "solver.max_step_halvings", "must be >= 0"),

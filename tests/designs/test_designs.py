@@ -371,6 +371,11 @@ def test_thin_gap_points_choose_their_mesh_motion_end_to_end(tmp_path):
     print("thin gap, holes beside, limit 0.6:", choice)
     assert choice.rule == "auto" and choice.algebraic.value < 0.6 <= choice.extension.value and choice.used == "extension"
     assert not np.any(pb.mesh_displacement.x.array) and pb.mesh_motion_solver in ("lu", "cg_icc")
+    # the urine step's own Newton settings (the wall and stent solves keep the general ones)
+    o, sv = pb.options, beside.config["solver"]
+    assert (o.newton_field_rtol, o.reuse_contraction, o.urine_step) == (
+        sv["one_way_newton_field_rtol"], sv["one_way_reuse_contraction"], sv["one_way_urine_step"])
+    assert o.reuse_contraction != sv["reuse_contraction"] and o.newton_field_rtol != sv["newton_field_rtol"]
 
 
 def test_wall_motion_with_a_halved_step_serves_the_run():

@@ -146,7 +146,8 @@ def fluid_problem(cfg: dict, mesh, cell_tags, facet_tags, history: WallHistory, 
     rule = cfg["solver"]["one_way_mesh_motion"]
     options = dataclasses.replace(solver_options(cfg), mesh_motion_coupling="segregated",
                                   urine_step=cfg["solver"]["one_way_urine_step"],
-                                  newton_field_rtol=cfg["solver"]["one_way_newton_field_rtol"])
+                                  newton_field_rtol=cfg["solver"]["one_way_newton_field_rtol"],
+                                  reuse_contraction=cfg["solver"]["one_way_reuse_contraction"])
 
     def posed(blend):
         return MonolithicFSI(ureter_fluid_scene(cfg, fluid.mesh, fluid.cell_tags, fluid.facet_tags, u_wall, v_wall,
