@@ -62,3 +62,11 @@ def test_a_corrupt_run_file_is_named(tmp_path):
     bad.write_bytes(b"not netCDF")
     with pytest.raises(BadFile, match=f"{bad.name}.*not a netCDF file"):
         status.study_status(cfg, "s", tmp_path)
+
+
+def test_a_results_root_without_results_is_refused(tmp_path):
+    """--results-root names the folder that holds results/: given results/ itself (or any folder without it), the
+    command says so instead of reporting every point as not begun."""
+    (tmp_path / "results").mkdir()
+    with pytest.raises(SystemExit, match=r"--results-root .*results: holds no results/ folder"):
+        status.main([str(REPO / "config" / "config.yaml"), "--results-root", str(tmp_path / "results")])

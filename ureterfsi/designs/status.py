@@ -90,6 +90,8 @@ def main(argv=None) -> None:
     ap.add_argument("--study", help="the study's name (default: every study of the overlays)")
     ap.add_argument("--results-root", type=Path, default=Path("."), help="the folder holding results/")
     args = ap.parse_args(argv)
+    if not (args.results_root / "results").is_dir():
+        raise SystemExit(f"--results-root {args.results_root}: holds no results/ folder (give the folder that holds it)")
     cfg = load_config_files(args.config)
     for name in [args.study] if args.study else sorted(expand.studies(cfg)):
         print(f"## {name}\n\n{table(study_status(cfg, name, args.results_root))}\n")
