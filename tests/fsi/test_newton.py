@@ -90,10 +90,9 @@ def test_modified_newton_keeps_the_jacobian_while_it_contracts():
 def test_a_residual_within_atol_keeps_the_factorisation():
     """Past ||R|| <= newton_atol only the increment test goes on, and the residual's ratio there (round-off on a real
     system) says nothing of the factorisation: a correction with half Newton's step contracts by 1/2, above
-    reuse_contraction, so it is refactorised at every iteration until ||R|| <= atol and never after (within the
-    first two thirds of newton_max_iterations, which this run does not reach)."""
+    reuse_contraction, so it is refactorised at every iteration until ||R|| <= atol and never after."""
     toy = Toy(SolverOptions(reuse_jacobian=True, reuse_contraction=0.4, newton_rtol=1e-30, newton_atol=1e-6,
-                            newton_field_rtol=1e-12, newton_max_iterations=200), start=1.4)
+                            newton_field_rtol=1e-12, newton_max_iterations=80), start=1.4)
 
     def half_step(fresh, rtol):
         toy.calls.append((fresh, rtol))
@@ -108,20 +107,6 @@ def test_a_residual_within_atol_keeps_the_factorisation():
     first = next(k for k, r in enumerate(history) if r <= 1e-6)
     assert 5 < first < len(fresh) - 5
     assert all(fresh[1:first]) and not any(fresh[first:])
-
-
-def test_a_kept_factorisation_is_refreshed_in_the_last_third_of_the_iterations():
-    """A kept Jacobian that still contracts (by 0.75 here, under reuse_contraction 0.8) would need ~90 iterations
-    to the increment test: in the last third of newton_max_iterations it is refreshed, and Newton converges within
-    them."""
-    o = SolverOptions(reuse_jacobian=True, reuse_contraction=0.8, newton_rtol=1e-30, newton_atol=1e-14,
-                      newton_field_rtol=1e-12, newton_max_iterations=16)
-    toy = Toy(o, start=1.26)
-    toy.jacobian = 3.0 * (2.0 * 1.26) ** 2         # kept from a state twice as far: a quarter of Newton's step
-    its, _ = toy.solve()
-    np.testing.assert_allclose(toy.x.x.array, np.cbrt(toy.c), rtol=1e-11)
-    fresh = [f for f, _ in toy.calls]
-    assert not any(fresh[:10]) and fresh[10] and its <= 16
 
 
 def test_failures_raise_newton_divergence_with_the_history():

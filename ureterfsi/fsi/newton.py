@@ -90,8 +90,7 @@ class Newton:
 
         Converged: ||R_k|| <= newton_atol or ||R_k|| <= newton_rtol ||R_0|| (k > 0), and every field's last
         increment within newton_field_rtol; stagnated (accepted): every field's increment within newton_stol.
-        A Jacobian is kept (reuse_jacobian) while ||R_k|| / ||R_k-1|| < reuse_contraction or ||R_k|| <= newton_atol,
-        and for the first two thirds of newton_max_iterations only.
+        A Jacobian is kept (reuse_jacobian) while ||R_k|| / ||R_k-1|| < reuse_contraction or ||R_k|| <= newton_atol.
         Failure: NewtonDivergence with the history."""
         o = self.options
         x, dx = self.x, self.dx
@@ -110,10 +109,8 @@ class Newton:
             if it == o.newton_max_iterations:
                 break
             contraction = history[-1] / history[-2] if len(history) > 1 else 0.0
-            # a residual within newton_atol is round-off: its ratio says nothing of the kept factorisation; and in
-            # the last third of newton_max_iterations a kept one is not trusted: a slow one must not use up the step
-            contracts = ((contraction < o.reuse_contraction or history[-1] <= o.newton_atol)
-                         and it < 2 * o.newton_max_iterations // 3)
+            # a residual within newton_atol is round-off: its ratio says nothing of the kept factorisation
+            contracts = contraction < o.reuse_contraction or history[-1] <= o.newton_atol
             fresh = not (o.reuse_jacobian and jacobian_current() and contracts)
             failure = correction(fresh, self._forcing(history, r0))
             if failure is not None:
