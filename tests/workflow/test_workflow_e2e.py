@@ -392,7 +392,8 @@ def test_slurm_profile_plans_the_jobs(tmp_path):
     assert serial["resources"]["tasks"] == "1" and "mpi" not in serial["resources"], serial
     assert "srun" not in serial["shell"] and " -m ureterfsi.study " in serial["shell"], serial
     for name, j in ((f"model2_{level}", mpi), (f"model1_{level}", serial)):
-        assert f"--run-config results/configs/{name.split('_')[0]}.json" in j["shell"], j
+        fidelity = Path(j["output"]).parts[-3]
+        assert f"--run-config results/configs/{fidelity}/{name.split('_')[0]}.json" in j["shell"], j
     assert [j["rule"] for j in jobs if "mpi" in j["resources"]] == ["solve"], "only the 3D fully coupled solve"
     assert all("mem_mb_per_cpu" not in j["resources"] for j in jobs)
     assert all("mem_mb" in j["resources"] for j in jobs if j["rule"] in ("solve", "mesh", "wall_motion"))

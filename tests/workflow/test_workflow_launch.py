@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from ureterfsi.config import load_config_files, run_config
+from ureterfsi.config.sections import rung_view
 from ureterfsi.designs import jobs as design_jobs
 from ureterfsi.designs.expand import studies
 from ureterfsi.designs.rung_check import reference_config
@@ -37,9 +38,9 @@ def parsed(command: str):
 def test_study_solve_command():
     job = launch.SolveJob("fully_coupled", "quarter", "3", "coarse", paths.mesh("quarter", "3", "coarse"),
                           paths.run("fully_coupled", "quarter", "3", "coarse"), paths.checkpoint("x"),
-                          run_config=paths.run_config("3"), end=0.3)
+                          run_config=paths.run_config("fully_coupled", "3"), end=0.3)
     cmd = launch.command(job, MPI, python="py")
-    assert cmd == ("mpiexec -n 4 py -m ureterfsi.study --run-config results/configs/model3.json --model 3"
+    assert cmd == ("mpiexec -n 4 py -m ureterfsi.study --run-config results/configs/fully_coupled/model3.json --model 3"
                    " --level coarse --symmetry quarter --fidelity fully_coupled"
                    " --mesh results/meshes/quarter/model3_coarse.msh"
                    " --out results/runs/fully_coupled/quarter/model3_coarse.nc --checkpoint results/checkpoints/x.npz"
@@ -113,7 +114,10 @@ def test_reference_and_escalated_commands():
     assert args.name == f"design point stricture_holes/{p.id} (escalated)"
     assert run == ["mpiexec", "-n", "4", "py"] and args.out == paths.escalated_run(st.name, p.id)
     cfg_run = run_config(json.loads(args.run_sections), args.model)
-    assert cfg_run["solver"] == reference_config(p.config)["solver"] and cfg_run["ends"] == p.config["ends"]
+    # the reference scheme's solver keys; the one-way keys (the point's one_way_mesh_motion: auto) at their defaults
+    assert cfg_run["solver"] == rung_view(reference_config(p.config), "fully_coupled")["solver"]
+    assert cfg_run["solver"]["one_way_mesh_motion"] != p.config["solver"]["one_way_mesh_motion"]
+    assert cfg_run["ends"] == rung_view(p.config, "fully_coupled")["ends"]
     trigger = json.loads(design_jobs.solve_trigger(design_jobs.escalated_solve(st, p.id)))
     assert trigger["rung"] == "fully_coupled" != json.loads(design_jobs.solve_trigger(
         design_jobs.point_solve(st, p.id)))["rung"]

@@ -17,10 +17,41 @@ RUN_SECTIONS = ("geometry", "fluid", "ureter", "stent", "peristalsis", "time", "
 DEFAULTED_RUN_SECTIONS = ("ends",)
 
 
-def run_sections(cfg: dict, model: str) -> dict:
-    """The configuration one solve of `model` reads (RUN_SECTIONS, DEFAULTED_RUN_SECTIONS off their defaults and its
-    entry of `models`): a change re-runs the solve (rule `solve`), and a checkpoint made from other values is not
-    resumed (ureterfsi.study)."""
+# the keys one fidelity rung alone reads (section.key): a run on the other rung holds them at the schema's defaults,
+# so that changing one re-runs no solve of the other rung. one_way: the urine step of ureterfsi.study.oneway and its
+# a-priori wall pressure; fully_coupled: its scheme and linear solver (study.options.solver_options) and the
+# partitioned scheme's sweeps and blocks (fsi.partitioned, fsi.block_forms)
+RUNG_KEYS = {
+    "one_way": ("solver.one_way_newton_field_rtol", "solver.one_way_mesh_motion", "solver.one_way_urine_step",
+                "solver.one_way_auto_min_jacobian", "solver.one_way_reuse_contraction",
+                "ends.one_way_pressure_tolerance"),
+    "fully_coupled": ("solver.fully_coupled_linear_solver", "solver.fully_coupled_scheme", "solver.anderson_depth",
+                      "solver.anderson_reuse", "solver.block_iterations", "solver.block_reuse_contraction",
+                      "solver.block_refresh_sweeps", "solver.solid_block", "solver.wall_jacobian_quadrature_degree",
+                      "solver.sweep_convergence"),
+}
+
+
+def rung_view(cfg: dict, fidelity: str) -> dict:
+    """`cfg` with the keys only the other rungs read (RUNG_KEYS) at the schema's defaults (a shallow copy down to
+    the sections it changes)."""
+    if fidelity not in RUNG_KEYS:
+        raise ValueError(f"fidelity must be one of {sorted(RUNG_KEYS)}, got {fidelity!r}")
+    out = dict(cfg)
+    for rung, keys in RUNG_KEYS.items():
+        if rung == fidelity:
+            continue
+        for dotted in keys:
+            section, key = dotted.split(".")
+            out[section] = dict(out[section]) | {key: schema_defaults(section)[key]}
+    return out
+
+
+def run_sections(cfg: dict, model: str, fidelity: str) -> dict:
+    """The configuration one solve of `model` on rung `fidelity` reads (RUN_SECTIONS, DEFAULTED_RUN_SECTIONS off
+    their defaults and its entry of `models`; the other rungs' keys at their defaults, rung_view): a change re-runs
+    the solve (rule `solve`), and a checkpoint made from other values is not resumed (ureterfsi.study)."""
+    cfg = rung_view(cfg, fidelity)
     off = {k: cfg[k] for k in DEFAULTED_RUN_SECTIONS if cfg[k] != schema_defaults(k)}
     return {k: cfg[k] for k in RUN_SECTIONS} | off | {"model": cfg["models"][model]}
 

@@ -289,7 +289,7 @@ def expand_rung_check(cfg: dict, name: str, spec: dict, study: Study) -> RungChe
         check.corners.append(corner)
         same = next((p for p in study.points if p.id == cid), None)
         if same is not None and (same.mesh_id, same.symmetry) == (corner.mesh_id, corner.symmetry) and \
-                run_sections(same.config, study.model) == run_sections(ccfg, study.model):
+                run_sections(same.config, study.model, study.rung) == run_sections(ccfg, study.model, study.rung):
             check.reuses[cid] = same.id
     return check
 

@@ -57,7 +57,7 @@ def escalated_inputs(st: Study, point_id: str) -> dict:
 
 def _solve(st: Study, p: Point, cfg: dict, rung: str, name: str, record_failure: bool) -> dict:
     return {"fidelity": rung, "symmetry": p.symmetry, "model": p.model, "level": st.level,
-            "sections": json.dumps(run_sections(cfg, p.model), sort_keys=True), "name": name,
+            "sections": json.dumps(run_sections(cfg, p.model, rung), sort_keys=True), "name": name,
             "record_failure": record_failure}
 
 

@@ -75,11 +75,11 @@ def _flatten(prefix: str, value, out: dict) -> None:
 
 def run_identity(cfg: dict, spec: RunSpec, fidelity: str, end: float, dt: float, wall_path: str | None = None) -> dict:
     """What determines a run, component -> value (TimeSettings.identity): every key of the configuration
-    sections it reads (ureterfsi.config.run_sections), the run's model, mesh level, symmetry, fidelity,
+    sections it reads on its rung (ureterfsi.config.run_sections), the run's model, mesh level, symmetry, fidelity,
     end and dt, the SHA-256 of the mesh file (and of the wall-motion file of a one-way run), and the
     versions of ureterfsi and dolfinx."""
     out: dict = {}
-    sections = run_sections(cfg, spec.model)
+    sections = run_sections(cfg, spec.model, fidelity)
     _flatten(f"models.{spec.model}", sections.pop("model"), out)
     _flatten("", sections, out)
     out.update({"run.model": spec.model, "run.level": spec.level, "run.symmetry": spec.symmetry,

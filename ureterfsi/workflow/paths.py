@@ -14,9 +14,9 @@ def mesh(symmetry=_w("symmetry"), model=_w("model"), level=_w("level"), ext="msh
     return f"{RESULTS}/meshes/{symmetry}/model{model}_{level}.{ext}"
 
 
-def run_config(model=_w("model")) -> str:
-    """The configuration of a model's solves (config.run_sections as JSON)."""
-    return f"{RESULTS}/configs/model{model}.json"
+def run_config(fidelity=_w("fidelity"), model=_w("model")) -> str:
+    """The configuration of a model's solves on one fidelity rung (config.run_sections as JSON)."""
+    return f"{RESULTS}/configs/{fidelity}/model{model}.json"
 
 
 def run(fidelity=_w("fidelity"), symmetry=_w("symmetry"), model=_w("model"), level=_w("level")) -> str:

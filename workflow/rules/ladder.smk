@@ -18,7 +18,9 @@ if LADDER:
                 LADDER["model"],
                 LADDER_RUNGS[w.rung]["level"],
             ),
-            config=run_config_file(LADDER["model"]),
+            config=lambda w: run_config_file(
+                LADDER_RUNGS[w.rung]["fidelity"], LADDER["model"]
+            ),
         output:
             paths.ladder_run(),
         log:

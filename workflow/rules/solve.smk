@@ -9,13 +9,13 @@
 
 rule solve_config:
     output:
-        run_config_file("{model}"),
+        run_config_file("{fidelity}", "{model}"),
     log:
-        paths.log("solve/config/model{model}"),
+        paths.log("solve/config/{fidelity}/model{model}"),
     localrule: True
     params:
-        # rerun trigger and the file's content: the configuration one solve of the model reads
-        sections=lambda w: run_sections(config, w.model),
+        # rerun trigger and the file's content: the configuration one solve of the model reads on the rung
+        sections=lambda w: run_sections(config, w.model, w.fidelity),
     script:
         "../scripts/solve_config.py"
 

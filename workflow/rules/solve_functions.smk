@@ -5,9 +5,10 @@ from ureterfsi.config import one_way_unposable
 # solve: a study run
 
 
-def run_config_file(model):
-    """The configuration file of a model's solves: config.run_sections as JSON, written by rule solve_config."""
-    return paths.run_config(model)
+def run_config_file(fidelity, model):
+    """The configuration file of a model's solves on a rung: config.run_sections as JSON, written by rule
+    solve_config."""
+    return paths.run_config(fidelity, model)
 
 
 def study_rung(w):
@@ -19,7 +20,7 @@ def solve_inputs(w):
     """The mesh and the configuration file, and for the one-way rung the shared wall motion."""
     inputs = {
         "mesh": paths.mesh(w.symmetry, w.model, w.level),
-        "config": run_config_file(w.model),
+        "config": run_config_file(w.fidelity, w.model),
     }
     if w.fidelity == "one_way":
         if one_way_unposable(config):  # refused before any job starts, in one line

@@ -1,4 +1,4 @@
-"""Snakemake script of rule `solve_config`: the configuration one solve of a model reads
+"""Snakemake script of rule `solve_config`: the configuration one solve of a model reads on a fidelity rung
 (ureterfsi.config.run_sections, the rule's params) as the JSON file that `python -m ureterfsi.study
 --run-config` reads."""
 from ureterfsi.data.provenance import write_json
