@@ -35,6 +35,17 @@ def test_finer_levels_first():
     assert [r.level_priority(CFG, lv) for lv in ("fine", "medium", "coarse")] == [2, 1, 0]
 
 
+def test_longest_solves_first():
+    """Finer levels first, then within a level the models with more side holes (the paper's: 22, 12, 6, none), so
+    that the shortest coarse run is the one left to fill the slot beside the fine run."""
+    cfg = CFG | {"models": yaml.safe_load((REPO / "config" / "config.yaml").read_text())["models"]}
+    runs = [(m, lv) for lv in ("coarse", "medium", "fine") for m in ("1", "2", "3", "4")]
+    ranked = sorted(runs, key=lambda ml: -r.solve_priority(cfg, *ml))
+    assert ranked[:4] == [("2", "fine"), ("3", "fine"), ("4", "fine"), ("1", "fine")]
+    assert ranked[-4:] == [("2", "coarse"), ("3", "coarse"), ("4", "coarse"), ("1", "coarse")]
+    assert len({r.solve_priority(cfg, *ml) for ml in runs}) == len(runs)
+
+
 @pytest.mark.parametrize("fidelity, symmetry, tasks, expected", [
     ("fully_coupled", "quarter", 4, "mpiexec -n 4 py"),
     ("fully_coupled", "quarter", 1, "py"),

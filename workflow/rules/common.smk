@@ -130,6 +130,12 @@ def level_priority(w):
     return decide.level_priority(config, w.level)
 
 
+def solve_priority(w):
+    """Scheduling priority of a study solve (decide.solve_priority: finer levels first, then the models with more
+    side holes)."""
+    return decide.solve_priority(config, w.model, w.level)
+
+
 def solve_mem_mb(fidelity, symmetry, level):
     """MiB a solve reserves (resource mem_mb; ureterfsi.workflow.resources.solve_mem_mb)."""
     return decide.solve_mem_mb(config, fidelity, symmetry, level)

@@ -49,7 +49,7 @@ rule solve:
         paths.log("solve/{fidelity}/{symmetry}/model{model}_{level}"),
     benchmark:
         paths.benchmark("solve/{fidelity}/{symmetry}/model{model}_{level}")
-    priority: level_priority
+    priority: solve_priority
     threads: 1
     resources:
         tasks=1,
