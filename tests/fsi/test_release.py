@@ -26,3 +26,24 @@ def test_ten_problems_built_and_released_leave_petsc_objects_and_memory_flat(mod
     assert all(row["live"] == rows[0]["live"] for row in rows), [row["live"] for row in rows]
     growth = rows[-1]["rss_mib"] - rows[2]["rss_mib"]
     assert growth < RSS_GROWTH_MIB, [round(row["rss_mib"]) for row in rows]
+
+
+HELD_AT_EXIT = """
+import sys
+import netCDF4  # noqa: F401  (before dolfinx)
+from ureterfsi.fsi import MonolithicFSI, OpenBoundary, SolverOptions
+from ureterfsi.scenes.rigid_pipe import INLET, OUTLET, RigidPipe, rigid_pipe_scene
+pb = MonolithicFSI(rigid_pipe_scene(RigidPipe(), 4, OpenBoundary([INLET], 0.0), OpenBoundary([OUTLET], 0.0)),
+                   SolverOptions())
+pb.A
+sys.exit("error: the solve failed during set-up")
+"""
+
+
+def test_a_problem_held_when_a_failed_solve_exits_says_nothing_more():
+    """A solve that fails after building its problem exits with its one-line message alone: the problem, still
+    held while the interpreter shuts down, is not closed then (petsc4py can no longer reach MPI; it printed an
+    ignored ImportError from MonolithicFSI.__del__)."""
+    proc = subprocess.run([sys.executable, "-c", HELD_AT_EXIT], capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert proc.stderr.strip() == "error: the solve failed during set-up", proc.stderr

@@ -19,6 +19,7 @@ matrices' sparsity (fsi.sparsity) and the ALE Jacobian guard (fsi.ale_jacobian).
 from __future__ import annotations
 
 import logging
+import sys
 import weakref
 
 import numpy as np
@@ -212,8 +213,9 @@ class MonolithicFSI(NewtonSystemMethods, HistoryMethods, MeshMotionMethods):
 
     def __del__(self):
         # one process closes a dropped problem here; on several, close() it (destruction is collective, Python's
-        # collection is not): see fsi.release
-        if getattr(self, "options_prefix", None) and self.comm.size == 1:
+        # collection is not): see fsi.release. Not while the interpreter shuts down (a problem still held when a
+        # failed solve exits): petsc4py can no longer reach MPI then, and the process's end frees everything
+        if getattr(self, "options_prefix", None) and self.comm.size == 1 and not sys.is_finalizing():
             self.close()
 
     # ---------------------------------------------------------------------------------------
