@@ -70,6 +70,10 @@ def test_shipped_whole_passage_studies_expand_on_the_50_mm_segment():
     assert sorted({round(p.values["stent_outer_diameter"] / rc_french(), 6) for p in void.points}) == [4.8, 6.0, 8.0]
     enc = studies(shipped("encrustation"))["encrustation"]
     assert sorted({p.config["geometry"]["occlusion_length"] for p in enc.points}) == [0.0, 0.001]
+    # the points whose flow and WSS around the obstruction are drawn from their field files
+    assert [len(studies(shipped(n))[n].field_points) for n in WHOLE_PASSAGE] == [2, 1, 0, 2]
+    assert occ.point(occ.field_points[1]).values == {"occlusion_position": 0.0425, "hole_pair_spacing": 0.010,
+                                                      "hole_pair_rotation": 90}
 
 
 def rc_french() -> float:
@@ -101,6 +105,33 @@ def test_occlusion_points_that_cannot_be_posed_are_refused_in_one_line():
     with pytest.raises(ConfigError) as err:
         load_config(deep_merge(BASE, bad))
     assert "one_way cannot pose the complete occlusion" in str(err.value)
+
+
+@pytest.mark.parametrize("entry,key,message", [
+    ({"occlusion_position": 0.0275, "hole_diameter": 0.0005}, "field_figures.0.hole_diameter",
+     "must be a parameter of the study ['occlusion_position', 'hole_pair_spacing', 'hole_pair_rotation']"),
+    ({"occlusion_position": 0.0275}, "field_figures.0", "must select exactly one design point, selects 6"),
+    ({"occlusion_position": 0.03, "hole_pair_spacing": 0.01, "hole_pair_rotation": 0}, "field_figures.0",
+     "must select exactly one design point, selects 0"),
+])
+def test_field_figure_points_are_refused_in_one_line_unless_they_select_one_point(entry, key, message):
+    """design_studies.<study>.field_figures: each entry names study parameters and selects exactly one point."""
+    overlay = yaml.safe_load((REPO / "config" / "designs" / "occlusion_holes.yaml").read_text())
+    overlay["design_studies"]["occlusion_holes"]["field_figures"] = [entry]
+    with pytest.raises(ConfigError) as err:
+        load_config(deep_merge(BASE, overlay))
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"config error: design_studies.occlusion_holes.{key}: {message}"), msg
+
+
+def test_field_figure_points_need_field_files():
+    """A point that writes no field files (fields.enabled false) has nothing to draw: refused, naming the entry."""
+    overlay = yaml.safe_load((REPO / "config" / "designs" / "occlusion_holes.yaml").read_text())
+    overlay["design_studies"]["occlusion_holes"]["base"]["fields"] = {"enabled": False}
+    with pytest.raises(ConfigError) as err:
+        load_config(deep_merge(BASE, overlay))
+    assert str(err.value).startswith("config error: design_studies.occlusion_holes.field_figures.0: point ") and \
+        "writes no field files (fields.enabled: false)" in str(err.value), err.value
 
 
 # ------------------------------------------------------------------------------------------ escalation
@@ -162,18 +193,20 @@ def test_a_failing_corner_escalates_its_region_in_the_job_plan(tmp_path):
 def test_an_escalating_study_plans_every_point_before_its_rung_check(tmp_path):
     """The dataset's inputs wait for the checkpoint, but design_<study> asks for every point's and reference's run:
     a dry run of stricture_holes lists them all (18 + 2), its 8 corners' fully coupled solves (the corners are grid
-    points: their one-way runs serve) and one wall motion per stricture position and the stented reference."""
+    points: their one-way runs serve), one wall motion per stricture position and the stented reference, and the
+    field figures of its field_figures point."""
     from helpers.design_runs import dry_run
 
     cfg = deep_merge(copy.deepcopy(BASE), yaml.safe_load((REPO / "config/designs/stricture_holes.yaml").read_text()))
     counts = dry_run(tmp_path, cfg, "design_stricture_holes")
     assert counts == {"design_mesh": 20, "design_wall_motion": 4, "design_solve": 20, "design_corner_solve": 8,
                       "design_rung_check": 1, "design_dataset": 1, "design_figures": 1, "design_map": 1,
-                      "design_passage": 1, "design_stricture_holes": 1}, counts
+                      "design_passage": 1, "design_field_hole_flow": 1, "design_field_stent_wss": 1,
+                      "design_stricture_holes": 1}, counts
 
 
 def test_the_dataset_records_the_rung_of_each_point(tmp_path):
-    from helpers.design_runs import fake_run
+    from helpers.design_runs import fake_run, stamp
 
     cfg, _ = _escalating_study(tmp_path)
     cfg = load_config(cfg)
@@ -189,7 +222,7 @@ def test_the_dataset_records_the_rung_of_each_point(tmp_path):
         paths[p.id] = tmp_path / f"{p.id}.nc"
         fake_run(paths[p.id], 1e-9, 1e-5)
     check = rc_dataset(cfg, corners)
-    ds = study_dataset(cfg, "s", paths, check)
+    ds = study_dataset(cfg, "s", stamp(st, paths), check)
     rung = ds["rung"].transpose("hole_diameter", "hole_pair_spacing").values
     assert rung.tolist() == [["one_way", "one_way"], ["one_way", "fully_coupled"], ["one_way", "fully_coupled"]]
     assert json.loads(ds.attrs["escalated_points"]) == escalated_points(st, check["corner_within_tolerance"].values)
@@ -236,10 +269,37 @@ def mini_occlusion_config(tmp_path) -> dict:
     return deep_merge(e2e_config(tmp_path / "base.yaml"), overlay)
 
 
+def test_a_run_made_under_another_configuration_is_refused(tmp_path):
+    """The runs of the 2 x 2 study made, then its base changed (the bladder's filling pressure) and Snakemake told to
+    rerun on mtime alone, which keeps them: the dataset refuses the first point's run in one line, naming the file,
+    rather than mixing two configurations; a one-way solver key (which no fully coupled solve reads) does not."""
+    from helpers.design_runs import stamp
+    from ureterfsi.data.checked import BadFile
+
+    raw = mini_occlusion_config(tmp_path)
+    st = studies(load_config(raw))["occlusion_mini"]
+    paths = {}
+    for i, p in enumerate(st.points + st.references):
+        paths[p.id] = tmp_path / f"{p.id}.nc"
+        _passage_run(paths[p.id], [0.00125, 0.00875], 2e-9, 0.999, 1100.0 + i)
+    stamp(st, paths)
+    other = copy.deepcopy(raw)
+    other.setdefault("solver", {})["one_way_reuse_contraction"] = 0.5
+    assert study_dataset(load_config(other), "occlusion_mini", paths).sizes["reference"] == 2
+    other["design_studies"]["occlusion_mini"]["base"]["ends"]["bladder"]["filling_pressure"] = 1200.0
+    with pytest.raises(BadFile) as err:
+        study_dataset(load_config(other), "occlusion_mini", paths)
+    first = st.points[0].id
+    assert str(err.value).startswith(f"{paths[first]}: made under another configuration than design point "
+                                      f"occlusion_mini/{first}'s on the fully_coupled rung (config_hash "), err.value
+    assert "\n" not in str(err.value) and str(err.value).endswith(f"re-run it (snakemake --forcerun {paths[first]})")
+
+
 def test_passage_quantities_of_the_dataset_pass_the_cf_checker(tmp_path):
     """Per point the obstruction and its centre, per hole upstream or not, the lumen share past the obstruction,
     the references on their dimension; every variable in the registry; CF 1.8 (compliance-checker)."""
     from helpers.cf_check import cf_errors
+    from helpers.design_runs import stamp
 
     cfg = load_config(mini_occlusion_config(tmp_path))
     st = studies(cfg)["occlusion_mini"]
@@ -247,7 +307,7 @@ def test_passage_quantities_of_the_dataset_pass_the_cf_checker(tmp_path):
     for i, p in enumerate(st.points + st.references):
         paths[p.id] = tmp_path / f"{p.id}.nc"
         _passage_run(paths[p.id], [0.00125, 0.00875], 2e-9, 0.999, 1100.0 + i)
-    ds = study_dataset(cfg, "occlusion_mini", paths)
+    ds = study_dataset(cfg, "occlusion_mini", stamp(st, paths))
     assert ds["obstruction_lumen_fraction"].dims == ("occlusion_position", "hole_pair_rotation")
     assert np.allclose(ds["obstruction_lumen_fraction"].values, 0.999)
     assert (ds["obstruction"].values == "occlusion").all()
@@ -285,7 +345,8 @@ def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     path.write_text(yaml.safe_dump(cfg, sort_keys=False))
     counts = job_counts(ok(snakemake(tmp_path, path, "--cores", "2", "design_occlusion_mini", timeout=5400)))
     assert counts == {"design_mesh": 6, "design_solve": 6, "design_dataset": 1, "design_figures": 1,
-                      "design_map": 1, "design_passage": 1, "design_occlusion_mini": 1}, counts
+                      "design_map": 1, "design_passage": 1, "design_field_hole_flow": 1, "design_field_stent_wss": 1,
+                      "design_occlusion_mini": 1}, counts
     check_occlusion_study(tmp_path, cfg)
 
 
@@ -334,3 +395,10 @@ def check_occlusion_study(work: Path, cfg: dict) -> None:
     for kind in ("parameters", "map", "passage"):
         for ext in cfg["figures"]["formats"]:
             assert (work / f"results/figures/designs/occlusion_mini_{kind}.{ext}").stat().st_size > 0, kind
+    # the field figures of the point field_figures selects: the occlusion at 4.5 mm, the pairs rotated
+    st = studies(load_config(cfg))["occlusion_mini"]
+    assert st.point(st.field_points[0]).values == {"occlusion_position": 0.0045, "hole_pair_rotation": 90}
+    for kind in ("field_hole_flow", "field_stent_wss"):
+        for ext in cfg["figures"]["formats"]:
+            path = work / f"results/figures/designs/occlusion_mini_{st.field_points[0]}_{kind}.{ext}"
+            assert path.stat().st_size > 0, path

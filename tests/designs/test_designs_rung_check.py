@@ -21,7 +21,7 @@ from ureterfsi.designs.results import QUANTITIES, rung_check_dataset, study_data
 from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import rung_check_metadata
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
-from helpers.design_runs import fake_run
+from helpers.design_runs import fake_run, stamp
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -191,8 +191,8 @@ def _synthetic(tmp_path: Path, cfg: dict, rung_error):
         fake_run(corners[c.id][0], peak, 1e-5, 2.0)
         fake_run(corners[c.id][1], peak / (1 + rung_error(c.values)), 1e-5, 7.0)
     check = rung_check_dataset(cfg, "s", corners)
-    assert check.attrs["rung_check"] in study_dataset(cfg, "s", paths, check).attrs["rung_check"]   # + the points
-    return st, study_dataset(cfg, "s", paths, check)
+    assert check.attrs["rung_check"] in study_dataset(cfg, "s", stamp(st, paths), check).attrs["rung_check"]   # + the points
+    return st, study_dataset(cfg, "s", stamp(st, paths), check)
 
 
 def test_dataset_records_the_rung_error_per_corner(tmp_path):
@@ -257,7 +257,7 @@ def test_an_unchecked_study_says_so(tmp_path):
     for p in st.points:
         paths[p.id] = tmp_path / f"{p.id}.nc"
         fake_run(paths[p.id], 1e-9, 1e-5)
-    ds = study_dataset(cfg, "s", paths)
+    ds = study_dataset(cfg, "s", stamp(st, paths))
     assert "rung_error" not in ds and (ds["rung_trusted"].values == 0).all()
     assert ds.attrs["rung_check"].startswith("not checked (design_studies.s.rung_check.corners: none)")
 
@@ -351,7 +351,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
     assert np.isnan(check["rung_error"].sel(corner=first).values).all()
     assert check["corner_within_tolerance"].values.tolist() == [0, 1, 1, 1]
     assert json.loads(check.attrs["rung_check_failed_corners"]) == {first: "(fully_coupled) failed: ALE mesh inverted"}
-    ds = study_dataset(cfg, "s", paths, check)
+    ds = study_dataset(cfg, "s", stamp(st, paths), check)
     text = ds.attrs["rung_check"]
     assert f"every corner solved within it; not checked (a solve failed) at {first}: (fully_coupled) failed" in text
     assert (ds["rung_trusted"].values == 0).all() and (ds["in_rung_check_region"].values == 1).all()

@@ -17,6 +17,7 @@ from ureterfsi.designs.results import SOBOL_INDICES, add_sobol_indices, sobol_in
 from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import VARIABLES
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
+from helpers.design_runs import stamp
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -128,7 +129,7 @@ def test_study_dataset_of_a_saltelli_design_holds_salibs_indices(tmp_path):
         x = np.array([[p.values["peak_traction"], p.values["wall_stiffness_scale"]]])
         paths[p.id] = tmp_path / f"{p.id}.nc"
         _fake_run(paths[p.id], f["peak_outlet_flux"](x)[0], f["peak_wall_displacement"](x)[0])
-    ds = study_dataset(cfg, "s", paths)
+    ds = study_dataset(cfg, "s", stamp(st, paths))
     assert ds.sizes["design"] == 32 and ds.sizes["saltelli_row"] == 48
     values = {p.id: [p.values["peak_traction"], p.values["wall_stiffness_scale"]] for p in st.points}
     x = np.array([values[r] for r in st.rows])

@@ -35,6 +35,22 @@ def fake_run(path: Path, peak: float, disp: float, wall_time: float = 1.0) -> No
     ds.to_netcdf(path)
 
 
+def stamp(st, paths: dict) -> dict:
+    """Mark the synthetic run files {point or reference id: path} of study `st` as its solves write them: the rung
+    (fidelity; a point's fully_coupled.nc the escalated run's) and the config_hash of the configuration that solve is
+    given (ureterfsi.designs.jobs.solve_config_hash), which the study's dataset checks. Returns `paths`."""
+    import netCDF4
+
+    from ureterfsi.designs import jobs
+
+    for pid, path in paths.items():
+        rung = "fully_coupled" if Path(path).name == "fully_coupled.nc" else st.point(pid).rung
+        with netCDF4.Dataset(path, "a") as nc:
+            nc.setncattr("fidelity", rung)
+            nc.setncattr("config_hash", jobs.solve_config_hash(st, pid, rung))
+    return paths
+
+
 def dry_run(work: Path, cfg: dict, target: str, *args):
     """The job counts {rule: n} of a dry run of `target` with configuration `cfg` (written to work/cfg.yaml)."""
     path = work / "cfg.yaml"

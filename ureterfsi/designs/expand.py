@@ -4,6 +4,7 @@ once per configuration."""
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -211,7 +212,34 @@ def expand_study(cfg: dict, name: str) -> Study:
                                   model, rung))
     study.check = expand_rung_check(cfg, name, spec, study)
     study.references = expand_references(cfg, name, spec, study)
+    study.field_points = expand_field_figures(name, spec, study)
     return study
+
+
+def expand_field_figures(name: str, spec: dict, study: Study) -> list:
+    """The ids of the points design_studies.<study>.field_figures selects, each entry the values of some of the
+    study's parameters that match exactly one point (within 1e-9 relative); ConfigError naming the entry when it
+    names another parameter, matches no point or several, or selects a point without field files to draw from (an
+    r-z or stent-free model, fields.enabled false)."""
+    out = []
+    for i, sel in enumerate(spec.get("field_figures") or []):
+        key = f"design_studies.{name}.field_figures.{i}"
+        unknown = sorted(set(sel) - set(study.parameters))
+        if unknown:
+            raise ConfigError(f"{key}.{unknown[0]}", f"must be a parameter of the study {study.parameters}")
+        hits = [p for p in study.points if all(math.isclose(p.values[k], v, rel_tol=1e-9, abs_tol=1e-15)
+                                               for k, v in sel.items())]
+        if len(hits) != 1:
+            raise ConfigError(key, f"must select exactly one design point, selects {len(hits)} ({_values_text(sel)})")
+        p = hits[0]
+        if p.symmetry == "axisymmetric" or not p.config["models"][p.model]["stent"]:
+            raise ConfigError(key, f"point {p.id} ({_values_text(p.values)}) has no side holes in 3D to draw "
+                                   f"(model {p.model}, {p.symmetry})")
+        if not p.config["fields"]["enabled"]:
+            raise ConfigError(key, f"point {p.id} writes no field files (fields.enabled: false)")
+        if p.id not in out:
+            out.append(p.id)
+    return out
 
 
 def expand_references(cfg: dict, name: str, spec: dict, study: Study) -> list:

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import json
 
+from ureterfsi.config.runs import run_config
 from ureterfsi.config.sections import mesh_sections, run_sections
+from ureterfsi.data.provenance import config_hash
 from ureterfsi.designs import expand
 from ureterfsi.designs.passage import escalated_from_file
 from ureterfsi.designs.rung_check import REFERENCE_RUNG, reference_config
@@ -77,6 +79,14 @@ def escalated_solve(st: Study, point_id: str) -> dict:
     return _solve(st, p, reference_config(p.config), REFERENCE_RUNG, name, False)
 
 
+def solve_config_hash(st: Study, point_id: str, rung: str) -> str:
+    """The config_hash (data.provenance) the run file of a point's (or reference's) solve on `rung` records: that of
+    the configuration its solve is given (point_solve; escalated_solve for the fully coupled run of a point off that
+    rung), as the solve reads it (config.run_config)."""
+    solve = point_solve(st, point_id) if rung == st.point(point_id).rung else escalated_solve(st, point_id)
+    return config_hash(run_config(json.loads(solve["sections"]), solve["model"]))
+
+
 def corner_solve(st: Study, corner_id: str, rung: str) -> dict:
     """The same of a corner's solve on `rung` (the study's or the fully coupled reference): a failure is recorded
     in its run file (the rung is not checked there, which the study's rung check reports) and the job succeeds,
@@ -124,9 +134,16 @@ def corner_runs(st: Study) -> list[str]:
     return [f for pair in expand.corner_run_paths(st).values() for f in pair]
 
 
+# the field figures of a point design_studies.<study>.field_figures selects (ureterfsi.plotting.fields)
+FIELD_FIGURE_KINDS = ("field_hole_flow", "field_stent_wss")
+
+
 def figures(st: Study, formats) -> list[str]:
-    """The figure files of a design study (expand.design_figure_kinds), one per format."""
-    return [paths.design_figure(st.name, k, ext) for k in expand.design_figure_kinds(st) for ext in formats]
+    """The figure files of a design study (expand.design_figure_kinds, and FIELD_FIGURE_KINDS of its field_points),
+    one per format."""
+    return ([paths.design_figure(st.name, k, ext) for k in expand.design_figure_kinds(st) for ext in formats]
+            + [paths.design_field_figure(st.name, p, k, ext) for p in st.field_points for k in FIELD_FIGURE_KINDS
+               for ext in formats])
 
 
 def rung_check_caption(dataset_path) -> str:

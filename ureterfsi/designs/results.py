@@ -12,8 +12,8 @@ import json
 import numpy as np
 import xarray as xr
 
-from ureterfsi.designs import rung_check as rc
-from ureterfsi.data.checked import Contract, open_netcdf
+from ureterfsi.designs import jobs, rung_check as rc
+from ureterfsi.data.checked import BadFile, Contract, open_netcdf
 from ureterfsi.designs.expand import studies
 from ureterfsi.designs.space import Study, base_values, point_id
 from ureterfsi.designs.passage import (OBSTRUCTION_SERIES, escalated_points, lumen_share, obstruction_lumen_fraction,
@@ -248,13 +248,27 @@ def _rung_check_part(st: Study, check) -> tuple[xr.Dataset | None, dict, np.ndar
     return part, attrs, inside.astype(np.int8), (inside & all_ok).astype(np.int8)
 
 
+def read_point_run(st: Study, point_id: str, path) -> xr.Dataset:
+    """A point's (or reference's) run file (DESIGN_RUN), refused (BadFile) unless it was made under the configuration
+    the point's solve on the run's rung is given now (its config_hash, jobs.solve_config_hash): a run kept from an
+    earlier version of the study (Snakemake told to rerun on mtime alone) is not mixed into the dataset."""
+    run = open_netcdf(path, DESIGN_RUN)
+    rung = run.attrs.get("fidelity") or run.attrs.get("rung")
+    want = jobs.solve_config_hash(st, point_id, rung)
+    if run.attrs.get("config_hash") != want:
+        raise BadFile(path, f"made under another configuration than design point {st.name}/{point_id}'s on the "
+                            f"{rung} rung (config_hash {run.attrs.get('config_hash')!r}, the point's {want!r}): "
+                            f"re-run it (snakemake --forcerun {path})")
+    return run
+
+
 def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = None):
     """Dataset of a study from its run files {point id: path} and, for a checked study, its rung check
     (rung_check_dataset), whose variables and attributes it takes, with per point whether it lies in the checked
     region and whether it is trusted there (see the module docstring and ureterfsi.designs.rung_check)."""
     st = studies(cfg)[name]
-    runs = {p.id: open_netcdf(paths[p.id], DESIGN_RUN) for p in st.points}
-    references = {r.id: point_scalars(open_netcdf(paths[r.id], DESIGN_RUN)) for r in st.references}
+    runs = {p.id: read_point_run(st, p.id, paths[p.id]) for p in st.points}
+    references = {r.id: point_scalars(read_point_run(st, r.id, paths[r.id])) for r in st.references}
     tc = cfg["time"]
     t = np.round(np.arange(0.0, tc["end"] + 0.5 * tc["dt"], tc["dt"]), 9)
     n_hole = max(r.sizes.get("hole", 0) for r in runs.values())

@@ -158,6 +158,7 @@ class Study:
     rows: list = field(default_factory=list)   # saltelli: the point id of each sample row, in SALib's order
     check: "RungCheck | None" = None           # the rung check at the corners (None: not checked)
     references: list = field(default_factory=list)   # Point per reference run (design_studies.<study>.references)
+    field_points: list = field(default_factory=list)  # ids of the points whose field figures are drawn (field_figures)
 
     def point(self, point_id: str) -> Point:
         """A design point or a reference run by its id."""

@@ -1,15 +1,21 @@
-"""Figures from the run's field files (read by ureterfsi.data.fieldfiles): the flow through the side holes of a
-window of the segment, the wall shear stress on the stent there, the pressure along the segment. The window
-(field_window) holds the obstruction and the nearest hole on each side of it, or the outlet-most side hole."""
+"""Figures from the run's field files (read by ureterfsi.data.fieldfiles; run_field_figure: one of a run file): the
+flow through the side holes of a window of the segment, the wall shear stress on the stent there, the pressure along
+the segment. The window (field_window) holds the obstruction and the nearest hole on each side of it, or the
+outlet-most side hole."""
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from matplotlib.colors import LogNorm
 from matplotlib.patches import Rectangle
 
+from ureterfsi.data import fieldfiles
+from ureterfsi.data.checked import RUN_FILE, open_netcdf
 from ureterfsi.data.fieldfiles import Section, StentWallShear
+from ureterfsi.mesh.geometry import UreterGeometry
 from ureterfsi.plotting.style import plt, styled
 
 
@@ -148,3 +154,35 @@ def fig_stent_wall_shear(ws: StentWallShear, holes, geom, threshold: float, titl
     cb.ax.axhline(threshold, color="r", lw=1.5)
     fig.suptitle(title)
     return fig
+
+
+FIELD_FIGURES = ("field_hole_flow", "field_stent_wss", "field_pressure")
+
+
+def run_field_figure(kind: str, run_path, cfg: dict, times, what: str):
+    """Figure `kind` (FIELD_FIGURES) of the run file `run_path` from its field files (its attribute fields_path),
+    at the snapshot `times` (s; None: every snapshot); the geometry and p_ref from `cfg`, the run's configuration;
+    `what` names the run in the title."""
+    run = open_netcdf(run_path, RUN_FILE)
+    # the field directory as a clean path (messages name its files): fields_path is relative to the run file
+    fs = fieldfiles.urine_fields(Path(os.path.normpath(Path(run_path).parent / run.attrs["fields_path"])))
+    times = [float(t) for t in (fs.times if times is None else times)]
+    geom = UreterGeometry.from_config(cfg)
+    if kind == "field_pressure":
+        lines = fieldfiles.pressure_lines(fs, times, geom)
+        centres = [float(run["pulse_centre"].sel(time=t, method="nearest")) for t in times]
+        return fig_pressure_along(lines, times, float(cfg["fluid"]["reference_pressure"]), centres,
+                                  f"Urine pressure along the segment\n{what}")
+    win = field_window(run["hole_z"].values, geom)
+    if kind == "field_hole_flow":
+        z = np.linspace(win.lo, win.hi, max(120, int(round((win.hi - win.lo) / 5.0e-5)) + 1))
+        sec = fieldfiles.hole_flow_section(fs, times, win.centre, geom, z=z)
+        in_plane = [float(run["hole_z"].values[k]) for k in win.holes if int(run["hole_axis"].values[k]) == 1]
+        return fig_hole_flow(sec, in_plane, geom, f"Urine flow {win.label}\n{what}")
+    if kind == "field_stent_wss":
+        ws = fieldfiles.stent_wall_shear(fs, times, win.centre, geom, half_width=win.half_width)
+        holes = [(hole_angle(int(run["hole_axis"].values[k]), float(run["hole_side"].values[k])),
+                  float(run["hole_z"].values[k])) for k in win.holes]
+        return fig_stent_wall_shear(ws, holes, geom, float(run["low_wss_threshold"]),
+                                    f"Wall shear stress on the stent {win.label}\n{what}")
+    raise ValueError(f"field figure kind must be one of {FIELD_FIGURES}, got {kind!r}")

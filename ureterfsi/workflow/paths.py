@@ -108,3 +108,8 @@ def design_dataset(study=_w("design_study")) -> str:
 def design_figure(study=_w("design_study"), kind=_w("kind"), ext=_w("ext")) -> str:
     """A design study's figure of one kind."""
     return figure(f"designs/{study}_{kind}", ext)
+
+
+def design_field_figure(study=_w("design_study"), point=_w("point"), kind=_w("kind"), ext=_w("ext")) -> str:
+    """A field figure (ureterfsi.plotting.fields.run_field_figure kind) of one design point."""
+    return figure(f"designs/{study}_{point}_{kind}", ext)

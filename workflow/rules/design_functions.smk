@@ -8,6 +8,30 @@ def design_figures(study):
     return design_jobs.figures(DESIGNS[study], FIGURE_FORMATS)
 
 
+def design_field_figure_outputs(kind):
+    """The field figure files of a design point (paths.design_field_figure), one per configured format; the report
+    format goes into the report (caption workflow/report/design_<kind>.rst)."""
+    out = []
+    for ext in FIGURE_FORMATS:
+        path = paths.design_field_figure(kind=kind, ext=ext)
+        if ext == REPORT_FORMAT:
+            path = report(
+                path, caption=f"../report/design_{kind}.rst", category="Design studies"
+            )
+        out.append(path)
+    return out
+
+
+def design_point_config(w):
+    """The configuration of a design point (its run's: geometry, models, fluid)."""
+    return DESIGNS[w.design_study].point(w.point).config
+
+
+def design_point_values(w):
+    """A design point's parameter values (SI units)."""
+    return DESIGNS[w.design_study].point(w.point).values
+
+
 def design_figure_outputs(kind):
     """The figure files of a design study's <kind> (paths.design_figure), one per configured format; the report format
     goes into the report (caption workflow/report/design_<kind>.rst)."""

@@ -6,7 +6,8 @@
 # the point's run), the checkpoint design_rung_check (the rung error per corner and quantity; under
 # rung_check.on_failure: escalate, design_dataset's input function reads it and asks design_escalated_solve for
 # the points nearest a failing corner), design_dataset, and the figures (design_figures, design_map,
-# design_sensitivity, design_passage).
+# design_sensitivity, design_passage; design_field_hole_flow and design_field_stent_wss of the points the study's
+# field_figures selects).
 # Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
 # Their inputs, rerun triggers and solves: ureterfsi.designs.jobs; the solve command: common.smk's solve_command.
 
@@ -209,6 +210,34 @@ if DESIGNS:
             rung_check=design_rung_check_caption,
         script:
             "../scripts/design_figures.py"
+
+    rule design_field_hole_flow:
+        input:
+            run=paths.design_run(),
+        output:
+            design_field_figure_outputs("field_hole_flow"),
+        log:
+            paths.log("designs/{design_study}_{point}_field_hole_flow"),
+        params:
+            dpi=FIGURE_OPTIONS["dpi"],
+            point_config=design_point_config,
+            point_values=design_point_values,
+        script:
+            "../scripts/design_field_figures.py"
+
+    rule design_field_stent_wss:
+        input:
+            run=paths.design_run(),
+        output:
+            design_field_figure_outputs("field_stent_wss"),
+        log:
+            paths.log("designs/{design_study}_{point}_field_stent_wss"),
+        params:
+            dpi=FIGURE_OPTIONS["dpi"],
+            point_config=design_point_config,
+            point_values=design_point_values,
+        script:
+            "../scripts/design_field_figures.py"
 
     for _study in DESIGNS:
 
