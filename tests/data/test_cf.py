@@ -15,7 +15,7 @@ import xarray as xr
 from ureterfsi.data import cf as metadata
 from ureterfsi.analyses.gci import gci_dataset
 from helpers.cf_check import cf_errors
-from helpers.design_runs import stamp
+from helpers.design_runs import stamp, stamp_corners
 from helpers.synthetic import convergence_dataset
 
 def test_encoding_follows_cf(tmp_path):
@@ -87,7 +87,7 @@ def design_study(cfg, tmp_path, saltelli=False) -> xr.Dataset:
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         for k, f in enumerate(corners[c.id]):
             metadata.write_netcdf(synthetic_run(c.config, "3", end=c.config["time"]["end"], wall_time=1.0 + k), f)
-    return design_results.study_dataset(cfg, "s", stamp(st, paths), design_results.rung_check_dataset(cfg, "s", corners))
+    return design_results.study_dataset(cfg, "s", stamp(st, paths), design_results.rung_check_dataset(cfg, "s", stamp_corners(st, corners)))
 
 
 KINDS = ("run", "models", "ladder", "mesh_convergence", "gci", "wall_motion", "stability_case", "stability",

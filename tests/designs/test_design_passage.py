@@ -206,7 +206,7 @@ def test_an_escalating_study_plans_every_point_before_its_rung_check(tmp_path):
 
 
 def test_the_dataset_records_the_rung_of_each_point(tmp_path):
-    from helpers.design_runs import fake_run, stamp
+    from helpers.design_runs import fake_run, stamp, stamp_corners
 
     cfg, _ = _escalating_study(tmp_path)
     cfg = load_config(cfg)
@@ -221,7 +221,7 @@ def test_the_dataset_records_the_rung_of_each_point(tmp_path):
     for p in st.points:
         paths[p.id] = tmp_path / f"{p.id}.nc"
         fake_run(paths[p.id], 1e-9, 1e-5)
-    check = rc_dataset(cfg, corners)
+    check = rc_dataset(cfg, stamp_corners(st, corners))
     ds = study_dataset(cfg, "s", stamp(st, paths), check)
     rung = ds["rung"].transpose("hole_diameter", "hole_pair_spacing").values
     assert rung.tolist() == [["one_way", "one_way"], ["one_way", "fully_coupled"], ["one_way", "fully_coupled"]]

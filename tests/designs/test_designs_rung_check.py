@@ -21,7 +21,7 @@ from ureterfsi.designs.results import QUANTITIES, rung_check_dataset, study_data
 from ureterfsi.data import cf as metadata
 from ureterfsi.data.cf import rung_check_metadata
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
-from helpers.design_runs import fake_run, stamp
+from helpers.design_runs import fake_run, stamp, stamp_corners
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
@@ -190,7 +190,7 @@ def _synthetic(tmp_path: Path, cfg: dict, rung_error):
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         fake_run(corners[c.id][0], peak, 1e-5, 2.0)
         fake_run(corners[c.id][1], peak / (1 + rung_error(c.values)), 1e-5, 7.0)
-    check = rung_check_dataset(cfg, "s", corners)
+    check = rung_check_dataset(cfg, "s", stamp_corners(st, corners))
     assert check.attrs["rung_check"] in study_dataset(cfg, "s", stamp(st, paths), check).attrs["rung_check"]   # + the points
     return st, study_dataset(cfg, "s", stamp(st, paths), check)
 
@@ -346,7 +346,7 @@ def test_a_corner_whose_solve_failed_is_reported_not_checked(tmp_path):
             write_failed_run(c.config, corners[c.id][1], "fully_coupled", "(fully_coupled) failed: ALE mesh inverted")
         else:
             fake_run(corners[c.id][1], 1e-9, 1e-5)
-    check = rung_check_dataset(cfg, "s", corners)
+    check = rung_check_dataset(cfg, "s", stamp_corners(st, corners))
     first = st.check.corners[0].id
     assert np.isnan(check["rung_error"].sel(corner=first).values).all()
     assert check["corner_within_tolerance"].values.tolist() == [0, 1, 1, 1]
@@ -368,6 +368,7 @@ def test_a_corrupt_corner_run_file_is_named_in_one_line(tmp_path):
         corners[c.id] = (tmp_path / f"{c.id}_rung.nc", tmp_path / f"{c.id}_ref.nc")
         for path in corners[c.id]:
             fake_run(path, 1e-9, 1e-5)
+    stamp_corners(st, corners)
     bad = corners[st.check.corners[1].id][1]
     bad.write_bytes(bad.read_bytes()[:300])
     with pytest.raises(BadFile) as err:

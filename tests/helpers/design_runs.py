@@ -51,6 +51,20 @@ def stamp(st, paths: dict) -> dict:
     return paths
 
 
+def stamp_corners(st, corners: dict) -> dict:
+    """The same for the rung check's corner runs {corner id: (run on the study's rung, fully coupled run)}
+    (ureterfsi.designs.jobs.corner_config_hash). Returns `corners`."""
+    import netCDF4
+
+    from ureterfsi.designs import jobs
+
+    for cid, pair in corners.items():
+        for path, rung in zip(pair, (st.rung, "fully_coupled")):
+            with netCDF4.Dataset(path, "a") as nc:
+                nc.setncattr("config_hash", jobs.corner_config_hash(st, cid, rung))
+    return corners
+
+
 def dry_run(work: Path, cfg: dict, target: str, *args):
     """The job counts {rule: n} of a dry run of `target` with configuration `cfg` (written to work/cfg.yaml)."""
     path = work / "cfg.yaml"

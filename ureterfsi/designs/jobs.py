@@ -87,6 +87,13 @@ def solve_config_hash(st: Study, point_id: str, rung: str) -> str:
     return config_hash(run_config(json.loads(solve["sections"]), solve["model"]))
 
 
+def corner_config_hash(st: Study, corner_id: str, rung: str) -> str:
+    """The same of a rung-check corner's solve on `rung` (corner_solve; a corner that reuses a point's run on the
+    study's rung has that point's configuration there)."""
+    solve = corner_solve(st, corner_id, rung)
+    return config_hash(run_config(json.loads(solve["sections"]), solve["model"]))
+
+
 def corner_solve(st: Study, corner_id: str, rung: str) -> dict:
     """The same of a corner's solve on `rung` (the study's or the fully coupled reference): a failure is recorded
     in its run file (the rung is not checked there, which the study's rung check reports) and the job succeeds,

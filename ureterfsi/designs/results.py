@@ -190,6 +190,9 @@ def rung_check_dataset(cfg: dict, name: str, corner_paths: dict) -> xr.Dataset:
     failed = {}
     for i, c in enumerate(ch.corners):
         runs = [read_run(path) for path in corner_paths[c.id]]
+        for path, run, rung in zip(corner_paths[c.id], runs, (st.rung, rc.REFERENCE_RUNG)):
+            refuse_other_configuration(path, run, jobs.corner_config_hash(st, c.id, rung),
+                                       f"rung-check corner {st.name}/{c.id}'s on the {rung} rung")
         failed.update({c.id: r.attrs["solve_failed"] for r in runs if "solve_failed" in r.attrs})
         if c.id in failed:
             continue
@@ -254,12 +257,18 @@ def read_point_run(st: Study, point_id: str, path) -> xr.Dataset:
     earlier version of the study (Snakemake told to rerun on mtime alone) is not mixed into the dataset."""
     run = open_netcdf(path, DESIGN_RUN)
     rung = run.attrs.get("fidelity") or run.attrs.get("rung")
-    want = jobs.solve_config_hash(st, point_id, rung)
-    if run.attrs.get("config_hash") != want:
-        raise BadFile(path, f"made under another configuration than design point {st.name}/{point_id}'s on the "
-                            f"{rung} rung (config_hash {run.attrs.get('config_hash')!r}, the point's {want!r}): "
-                            f"re-run it (snakemake --forcerun {path})")
+    refuse_other_configuration(path, run, jobs.solve_config_hash(st, point_id, rung),
+                               f"design point {st.name}/{point_id}'s on the {rung} rung")
     return run
+
+
+def refuse_other_configuration(path, run: xr.Dataset, want: str, whose: str) -> None:
+    """BadFile (one line, naming `path`) unless the run file `run` records the config_hash `want` of `whose`
+    solve's configuration."""
+    got = run.attrs.get("config_hash")
+    if got != want:
+        raise BadFile(path, f"made under another configuration than {whose} (config_hash {got!r}, the solve's now "
+                            f"{want!r}): re-run it (snakemake --forcerun {path})")
 
 
 def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = None):
