@@ -9,17 +9,8 @@ def design_figures(study):
 
 
 def design_field_figure_outputs(kind):
-    """The field figure files of a design point (paths.design_field_figure), one per configured format; the report
-    format goes into the report (caption workflow/report/design_<kind>.rst)."""
-    out = []
-    for ext in FIGURE_FORMATS:
-        path = paths.design_field_figure(kind=kind, ext=ext)
-        if ext == REPORT_FORMAT:
-            path = report(
-                path, caption=f"../report/design_{kind}.rst", category="Design studies"
-            )
-        out.append(path)
-    return out
+    """The field figure files of a design point (paths.design_field_figure), as design_figure_outputs."""
+    return _design_outputs(paths.design_field_figure, kind)
 
 
 def design_point_config(w):
@@ -35,9 +26,13 @@ def design_point_values(w):
 def design_figure_outputs(kind):
     """The figure files of a design study's <kind> (paths.design_figure), one per configured format; the report format
     goes into the report (caption workflow/report/design_<kind>.rst)."""
+    return _design_outputs(paths.design_figure, kind)
+
+
+def _design_outputs(path_of, kind):
     out = []
     for ext in FIGURE_FORMATS:
-        path = paths.design_figure(kind=kind, ext=ext)
+        path = path_of(kind=kind, ext=ext)
         if ext == REPORT_FORMAT:
             caption = f"../report/design_{kind}.rst"
             path = report(path, caption=caption, category="Design studies")
