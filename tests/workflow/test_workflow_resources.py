@@ -44,6 +44,7 @@ def test_longest_solves_first():
     assert ranked[:4] == [("2", "fine"), ("3", "fine"), ("4", "fine"), ("1", "fine")]
     assert ranked[-4:] == [("2", "coarse"), ("3", "coarse"), ("4", "coarse"), ("1", "coarse")]
     assert len({r.solve_priority(cfg, *ml) for ml in runs}) == len(runs)
+    assert r.wall_priority(cfg) > max(r.solve_priority(cfg, *ml) for ml in runs)
 
 
 @pytest.mark.parametrize("fidelity, symmetry, tasks, expected", [

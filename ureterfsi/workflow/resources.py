@@ -21,12 +21,19 @@ def level_priority(cfg: dict, level: str) -> int:
 
 
 def solve_priority(cfg: dict, model: str, level: str) -> int:
-    """Scheduling priority of a study solve: by level as level_priority, then within a level by the model's side
-    holes (the mesh, and the run's cost, grow with them: coarse models 2, 3, 4 took 722, 651, 557 s on one day,
-    docs/performance.md), so that the longest jobs start first and the shortest fill the slot the fine run leaves."""
+    """Scheduling priority of a study solve and of its mesh: by level as level_priority, then within a level by the
+    model's side holes (the mesh, and the run's cost, grow with them: coarse models 2, 3, 4 took 722, 651, 557 s on
+    one day, docs/performance.md), so that the longest jobs start first and the shortest fill the slot the fine run
+    leaves."""
     models = cfg["models"]
     order = sorted(models, key=lambda m: (bool(models[m]["stent"]), int(models[m]["holes"]), m))
     return level_priority(cfg, level) * len(models) + order.index(str(model))
+
+
+def wall_priority(cfg: dict) -> int:
+    """Scheduling priority of the one-way rung's r-z wall solve, which every one-way run waits for: above every
+    solve_priority."""
+    return len(cfg["mesh"]["levels"]) * len(cfg["models"])
 
 
 def solve_mem_mb(cfg: dict, fidelity: str, symmetry: str, level: str) -> int:

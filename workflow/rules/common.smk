@@ -125,14 +125,9 @@ def refuse_unmakeable(w):
     return []
 
 
-def level_priority(w):
-    """Scheduling priority of a level's mesh and solve jobs (decide.level_priority: finer levels first)."""
-    return decide.level_priority(config, w.level)
-
-
 def solve_priority(w):
-    """Scheduling priority of a study solve (decide.solve_priority: finer levels first, then the models with more
-    side holes)."""
+    """Scheduling priority of a study solve and of its mesh (decide.solve_priority: finer levels first, then the
+    models with more side holes)."""
     return decide.solve_priority(config, w.model, w.level)
 
 

@@ -15,7 +15,7 @@ rule mesh:
         paths.log("mesh/{symmetry}/model{model}_{level}"),
     benchmark:
         paths.benchmark("mesh/{symmetry}/model{model}_{level}")
-    priority: level_priority
+    priority: solve_priority
     threads: 1
     params:
         # rerun trigger: the configuration entering a mesh

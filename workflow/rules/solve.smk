@@ -30,7 +30,7 @@ rule wall_motion:
         paths.log("solve/one_way/wall_motion"),
     benchmark:
         paths.benchmark("solve/one_way/wall_motion")
-    priority: 10
+    priority: decide.wall_priority(config)
     threads: 1
     resources:
         mem_mb=config["study"]["memory_mb"]["axisymmetric"],
