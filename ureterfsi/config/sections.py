@@ -2,6 +2,8 @@
 other values is refused. The one list of them: rule mesh, rule solve (and design_solve), the one-way rung's wall."""
 from __future__ import annotations
 
+import functools
+
 from .end_pressures import wall_pressure_posed
 from .schema import schema_defaults
 
@@ -38,13 +40,15 @@ def rung_view(cfg: dict, fidelity: str) -> dict:
     if fidelity not in RUNG_KEYS:
         raise ValueError(f"fidelity must be one of {sorted(RUNG_KEYS)}, got {fidelity!r}")
     out = dict(cfg)
-    for rung, keys in RUNG_KEYS.items():
-        if rung == fidelity:
-            continue
-        for dotted in keys:
-            section, key = dotted.split(".")
-            out[section] = dict(out[section]) | {key: schema_defaults(section)[key]}
+    for dotted in (k for rung, keys in RUNG_KEYS.items() if rung != fidelity for k in keys):
+        section, key = dotted.split(".")
+        out[section] = dict(out[section]) | {key: _defaults(section)[key]}
     return out
+
+
+@functools.cache
+def _defaults(section: str) -> dict:
+    return schema_defaults(section)
 
 
 def run_sections(cfg: dict, model: str, fidelity: str) -> dict:

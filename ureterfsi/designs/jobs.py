@@ -83,14 +83,16 @@ def solve_config_hash(st: Study, point_id: str, rung: str) -> str:
     """The config_hash (data.provenance) the run file of a point's (or reference's) solve on `rung` records: that of
     the configuration its solve is given (point_solve; escalated_solve for the fully coupled run of a point off that
     rung), as the solve reads it (config.run_config)."""
-    solve = point_solve(st, point_id) if rung == st.point(point_id).rung else escalated_solve(st, point_id)
-    return config_hash(run_config(json.loads(solve["sections"]), solve["model"]))
+    return _config_hash(point_solve(st, point_id) if rung == st.point(point_id).rung else escalated_solve(st, point_id))
 
 
 def corner_config_hash(st: Study, corner_id: str, rung: str) -> str:
     """The same of a rung-check corner's solve on `rung` (corner_solve; a corner that reuses a point's run on the
     study's rung has that point's configuration there)."""
-    solve = corner_solve(st, corner_id, rung)
+    return _config_hash(corner_solve(st, corner_id, rung))
+
+
+def _config_hash(solve: dict) -> str:
     return config_hash(run_config(json.loads(solve["sections"]), solve["model"]))
 
 
