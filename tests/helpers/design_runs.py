@@ -39,30 +39,31 @@ def stamp(st, paths: dict) -> dict:
     """Mark the synthetic run files {point or reference id: path} of study `st` as its solves write them: the rung
     (fidelity; a point's fully_coupled.nc the escalated run's) and the config_hash of the configuration that solve is
     given (ureterfsi.designs.jobs.solve_config_hash), which the study's dataset checks. Returns `paths`."""
-    import netCDF4
-
     from ureterfsi.designs import jobs
 
     for pid, path in paths.items():
         rung = "fully_coupled" if Path(path).name == "fully_coupled.nc" else st.point(pid).rung
-        with netCDF4.Dataset(path, "a") as nc:
-            nc.setncattr("fidelity", rung)
-            nc.setncattr("config_hash", jobs.solve_config_hash(st, pid, rung))
+        _set_attrs(path, fidelity=rung, config_hash=jobs.solve_config_hash(st, pid, rung))
     return paths
 
 
 def stamp_corners(st, corners: dict) -> dict:
     """The same for the rung check's corner runs {corner id: (run on the study's rung, fully coupled run)}
     (ureterfsi.designs.jobs.corner_config_hash). Returns `corners`."""
-    import netCDF4
-
     from ureterfsi.designs import jobs
 
     for cid, pair in corners.items():
         for path, rung in zip(pair, (st.rung, "fully_coupled")):
-            with netCDF4.Dataset(path, "a") as nc:
-                nc.setncattr("config_hash", jobs.corner_config_hash(st, cid, rung))
+            _set_attrs(path, config_hash=jobs.corner_config_hash(st, cid, rung))
     return corners
+
+
+def _set_attrs(path, **attrs) -> None:
+    import netCDF4
+
+    with netCDF4.Dataset(path, "a") as nc:
+        for k, v in attrs.items():
+            nc.setncattr(k, v)
 
 
 def dry_run(work: Path, cfg: dict, target: str, *args):
