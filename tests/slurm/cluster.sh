@@ -34,7 +34,9 @@ node=$(hostname -s)
 cpus=2                                   # declared CPUs: 2 (the CI machine's cores; jobs are tiny)
 mem=6000                                 # declared memory (MiB); the site overlay says the same
 export SLURM_CONF="$T/slurm.conf"
-mkdir -p "$T/state" "$T/spool" "$T/db" "$T/log"
+# tmp (TmpFS): the PMIx step directories, private to this cluster. Job ids restart at 1 with each cluster, and a
+# /tmp/spmix_appdir_0_<job>.0 left by an earlier one (a step killed before its clean-up) fails that step's launch.
+mkdir -p "$T/state" "$T/spool" "$T/db" "$T/log" "$T/tmp"
 
 # munge: its own key, on the default socket (SLURM's persistent connections do not read AuthInfo)
 mkdir -p /run/munge
@@ -81,6 +83,7 @@ AuthType=auth/munge
 CredType=cred/munge
 StateSaveLocation=$T/state
 SlurmdSpoolDir=$T/spool
+TmpFS=$T/tmp
 SlurmctldPidFile=$T/slurmctld.pid
 SlurmdPidFile=$T/slurmd.pid
 SlurmctldLogFile=$T/log/slurmctld.log
@@ -118,5 +121,8 @@ set +e
 "$@"
 status=$?
 set -e
+if [ $status -ne 0 ]; then
+  for f in slurmctld slurmd; do echo "--- tail of $f.log"; tail -n 40 "$T/log/$f.log"; done
+fi
 echo "tests/slurm/cluster.sh: done after ${SECONDS} s (status $status)"
 exit $status
