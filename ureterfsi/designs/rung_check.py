@@ -1,10 +1,11 @@
 """Trust at every design point: a design study's rung checked against the fully coupled model at the
-corners of its design space, on the 10 mm segment.
+corners of its design space, on the segment its configuration names (the 10 mm segment by default).
 
 A study on a rung cheaper than ``fully_coupled`` (``one_way``: the scenes' rung) is checked at the corners of its
 design space: for each corner the study's rung and the fully coupled model (``fully_coupled_scheme:
 partitioned``, 3D, the corner's mesh) solve the corner's configuration on the segment (config
-``design_studies.<study>.rung_check.segment``, an overlay: the 10 mm segment of ``config/segment-10mm.yaml``),
+``design_studies.<study>.rung_check.segment``, an overlay: by default the 10 mm segment of
+``config/segment-10mm.yaml``; ``config/config.yaml``, the study's own segment, where its corners are its points),
 each its own job; the dataset records, per corner and per scalar quantity, the relative error
 
     e = |q_rung - q_fully_coupled| / s_q
