@@ -82,6 +82,27 @@ def rc_french() -> float:
     return FRENCH
 
 
+def test_encrustation_shares_four_solves_with_occlusion_holes():
+    """docs/design-passage.md: encrustation's 0.5 mm holes with the occlusion (pairs every 5, 10, 25 mm) and without
+    it (every 10 mm) are occlusion_holes' aligned points at 27.5 mm and its stented reference, to the configuration
+    hash the dataset checks a run file against, and no other of its points is."""
+    from ureterfsi.designs.jobs import solve_config_hash
+    both = load_config(deep_merge(shipped("occlusion_holes"),
+                                  yaml.safe_load((REPO / "config" / "designs" / "encrustation.yaml").read_text())))
+    occ, enc = studies(both)["occlusion_holes"], studies(both)["encrustation"]
+    occ_hashes = {solve_config_hash(occ, p.id, occ.rung): p for p in occ.points + occ.references}
+    shared = {}
+    for p in enc.points:
+        twin = occ_hashes.get(solve_config_hash(enc, p.id, enc.rung))
+        if twin is not None:
+            shared[(p.values["hole_pair_spacing"], p.values["occlusion_length"])] = (
+                twin.name if twin in occ.references else
+                (twin.values["occlusion_position"], twin.values["hole_pair_spacing"], twin.values["hole_pair_rotation"]))
+            assert p.values["hole_diameter"] == 0.0005, p.values
+    assert shared == {(0.005, 0.001): (0.0275, 0.005, 0), (0.010, 0.001): (0.0275, 0.010, 0),
+                      (0.025, 0.001): (0.0275, 0.025, 0), (0.010, 0.0): "stented"}, shared
+
+
 def test_occlusion_points_that_cannot_be_posed_are_refused_in_one_line():
     """An occlusion over a hole pair, or a reference without a stent under the occlusion: one line naming the key."""
     overlay = yaml.safe_load((REPO / "config" / "designs" / "occlusion_holes.yaml").read_text())
