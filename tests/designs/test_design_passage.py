@@ -21,6 +21,7 @@ from ureterfsi.data import cf as metadata
 from ureterfsi.data.provenance import FORMAT_VERSION, FORMAT_VERSION_ATTR
 from ureterfsi.designs import rung_check as rc
 from ureterfsi.designs.expand import studies
+from ureterfsi.designs.jobs import solve_config_hash
 from ureterfsi.designs.passage import REFERENCE_SCALARS, escalated_points
 from ureterfsi.designs.results import study_dataset
 
@@ -86,7 +87,6 @@ def test_encrustation_shares_four_solves_with_occlusion_holes():
     """docs/design-passage.md: encrustation's 0.5 mm holes with the occlusion (pairs every 5, 10, 25 mm) and without
     it (every 10 mm) are occlusion_holes' aligned points at 27.5 mm and its stented reference, to the configuration
     hash the dataset checks a run file against, and no other of its points is."""
-    from ureterfsi.designs.jobs import solve_config_hash
     both = load_config(deep_merge(shipped("occlusion_holes"),
                                   yaml.safe_load((REPO / "config" / "designs" / "encrustation.yaml").read_text())))
     occ, enc = studies(both)["occlusion_holes"], studies(both)["encrustation"]

@@ -2,8 +2,6 @@
 other values is refused. The one list of them: rule mesh, rule solve (and design_solve), the one-way rung's wall."""
 from __future__ import annotations
 
-import functools
-
 from .end_pressures import wall_pressure_posed
 from .schema import schema_defaults
 
@@ -39,16 +37,12 @@ def rung_view(cfg: dict, fidelity: str) -> dict:
     the sections it changes)."""
     if fidelity not in RUNG_KEYS:
         raise ValueError(f"fidelity must be one of {sorted(RUNG_KEYS)}, got {fidelity!r}")
+    other = [k.split(".") for rung, keys in RUNG_KEYS.items() if rung != fidelity for k in keys]
     out = dict(cfg)
-    for dotted in (k for rung, keys in RUNG_KEYS.items() if rung != fidelity for k in keys):
-        section, key = dotted.split(".")
-        out[section] = dict(out[section]) | {key: _defaults(section)[key]}
+    for section in {s for s, _ in other}:
+        defaults = schema_defaults(section)
+        out[section] = dict(out[section]) | {k: defaults[k] for s, k in other if s == section}
     return out
-
-
-@functools.cache
-def _defaults(section: str) -> dict:
-    return schema_defaults(section)
 
 
 def run_sections(cfg: dict, model: str, fidelity: str) -> dict:

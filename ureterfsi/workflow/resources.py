@@ -33,7 +33,7 @@ def solve_priority(cfg: dict, model: str, level: str) -> int:
 def wall_priority(cfg: dict) -> int:
     """Scheduling priority of the one-way rung's r-z wall solve, which every one-way run waits for: above every
     solve_priority."""
-    return len(cfg["mesh"]["levels"]) * len(cfg["models"])
+    return 1 + max(solve_priority(cfg, m, level) for m in cfg["models"] for level in cfg["mesh"]["levels"])
 
 
 def solve_mem_mb(cfg: dict, fidelity: str, symmetry: str, level: str) -> int:
