@@ -342,6 +342,7 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
                                      rung=st.rung, escalated_points=escalated,
                                      point_symmetry={p.id: p.symmetry for p in st.points},
                                      base_values=st.base,
+                                     study_base=cfg["design_studies"][name].get("base") or {},
                                      points={p.id: p.values for p in st.points},
                                      point_config_hashes={p.id: runs[p.id].attrs.get("config_hash", "") for p in st.points},
                                      references={r.name: r.id for r in st.references}))

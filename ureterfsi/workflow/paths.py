@@ -105,6 +105,11 @@ def design_dataset(study=_w("design_study")) -> str:
     return f"{DESIGNS}/{study}.nc"
 
 
+def design_question() -> str:
+    """The spacing's effect on the outlet flow over every study that varies it (ureterfsi.designs.question)."""
+    return f"{DESIGNS}/question.md"
+
+
 def design_figure(study=_w("design_study"), kind=_w("kind"), ext=_w("ext")) -> str:
     """A design study's figure of one kind."""
     return figure(f"designs/{study}_{kind}", ext)

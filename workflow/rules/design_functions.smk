@@ -1,11 +1,19 @@
 # Input functions, params and resources of the design stage (designs.smk), thin wrappers of
 # ureterfsi.designs.jobs; included after common.smk.
 from ureterfsi.designs import jobs as design_jobs
+from ureterfsi.designs import question as hole_question
 
 
 def design_figures(study):
     """The figure files of a design study (design_jobs.figures)."""
     return design_jobs.figures(DESIGNS[study], FIGURE_FORMATS)
+
+
+def question_datasets():
+    """The datasets of the studies that vary the hole-pair spacing on a grid (ureterfsi.designs.question.asks)."""
+    return [
+        paths.design_dataset(s) for s, st in DESIGNS.items() if hole_question.asks(st)
+    ]
 
 
 def design_field_figure_outputs(kind):

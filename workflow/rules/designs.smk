@@ -7,8 +7,8 @@
 # rung_check.on_failure: escalate, design_dataset's input function reads it and asks design_escalated_solve for
 # the points nearest a failing corner), design_dataset, and the figures (design_figures, design_map,
 # design_sensitivity, design_passage; design_field_hole_flow and design_field_stent_wss of the points the study's
-# field_figures selects).
-# Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), designs_all.
+# field_figures selects), and design_question (the spacing's effect on the outlet flow over every study varying it).
+# Targets: design_<study> per study, design_<study>_rung_check (its rung check alone), design_question, designs_all.
 # Their inputs, rerun triggers and solves: ureterfsi.designs.jobs; the solve command: common.smk's solve_command.
 
 DESIGN_MESHES = design_jobs.meshes(DESIGNS)
@@ -258,7 +258,18 @@ if DESIGNS:
                 input:
                     paths.rung_check(_study),
 
+    rule design_question:
+        input:
+            question_datasets(),
+        output:
+            paths.design_question(),
+        log:
+            paths.log("designs/question"),
+        script:
+            "../scripts/design_question.py"
+
     rule designs_all:
         input:
             [paths.design_dataset(s) for s in DESIGNS],
             [f for s in DESIGNS for f in design_figures(s)],
+            [paths.design_question()] if question_datasets() else [],
