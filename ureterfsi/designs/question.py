@@ -4,7 +4,8 @@ grid, at every combination of its other parameters, how far apart the spacings' 
 
     outlet_flux_spread = max_t (max_s Q_s(t) - min_s Q_s(t)) / max_{s,t} |Q_s(t)|,
 
-with Q_s the outlet flux at spacing s, and the net outlet volume int Q_s dt of each spacing over the window, beside
+with Q_s the outlet flux at spacing s, and the net outlet volume int Q_s dt of each spacing over the window (its
+`mean_outlet_flux`, from the run file, times the window), beside
 the scene that holds it (the study's obstruction and ends) and the window (docs/design-passage.md)::
 
     .venv/bin/python -m ureterfsi.designs.question results/designs/occlusion_holes.nc results/designs/voiding_reflux.nc
@@ -19,7 +20,6 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy.integrate import trapezoid
 
 from ureterfsi.data.checked import open_netcdf
 from ureterfsi.data.provenance import atomic_path
@@ -49,8 +49,11 @@ def asks(st) -> bool:
 
 def outlet_flux_spread(q: np.ndarray) -> float:
     """max_t (max_s q - min_s q) / max |q| of the outlet fluxes q[s, t] (module docstring); NaN without flow."""
-    peak = np.nanmax(np.abs(q))
-    return float(np.nanmax(np.nanmax(q, axis=0) - np.nanmin(q, axis=0)) / peak) if peak > 0 else np.nan
+    q = q[:, np.isfinite(q).any(axis=0)]
+    peak = np.abs(q).max(initial=0.0, where=np.isfinite(q))
+    if not peak > 0:
+        return np.nan
+    return float(np.nanmax(np.nanmax(q, axis=0) - np.nanmin(q, axis=0)) / peak)
 
 
 def conditions(ds: xr.Dataset, sel: dict) -> str:
@@ -82,7 +85,7 @@ def spacing_effects(ds: xr.Dataset) -> list[SpacingEffect]:
         rows.append(SpacingEffect(
             study=ds.attrs.get("study", "?"), values=sel, condition=conditions(ds, sel), window=(float(t[0]), float(t[-1])),
             spacings=ds[SPACING].values.astype(float).tolist(), outlet_flux_spread=outlet_flux_spread(q),
-            outlet_volumes=[float(trapezoid(qs, t)) if np.isfinite(qs).all() else np.nan for qs in q],
+            outlet_volumes=(ds["mean_outlet_flux"].sel(sel).transpose(SPACING).values * (t[-1] - t[0])).tolist(),
             peak_outlet_flux=float(np.nanmax(np.abs(q)))))
     return rows
 

@@ -290,7 +290,7 @@ def study_dataset(cfg: dict, name: str, paths: dict, check: xr.Dataset | None = 
         r = runs[p.id]
         for k, v in point_scalars(r).items():
             data[k][i, ...] = v if np.ndim(v) == 0 else np.pad(v, (0, n_hole - len(v)), constant_values=np.nan)
-        rt = r["time"].values.astype(float)
+        rt = np.round(r["time"].values.astype(float), 9)     # the grid's rounding: summed steps end at 2.99999999999998
         for k in SERIES:
             if k in r or k == "pressure_drop":
                 v = pressure_drop(r) if k == "pressure_drop" else r[k].values
