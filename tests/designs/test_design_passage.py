@@ -353,8 +353,8 @@ def test_passage_quantities_of_the_dataset_pass_the_cf_checker(tmp_path):
 
 def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     """tests/overlays/occlusion-holes-mini.yaml: occlusion position (4.5, 5.5 mm) x hole-pair arrangement on the 10 mm
-    segment, fully coupled by the partitioned sweeps under the radial load (as the study), the pelvis filled at 1 mL/min and the bladder at its filling pressure, two steps of 20
-    ms, with the unstented and the stented unobstructed references: configuration -> meshes -> solves -> dataset ->
+    segment, fully coupled by the partitioned sweeps under the radial load (as the study), the pelvis filled at
+    1 mL/min and the bladder at its filling pressure, two steps of 20 ms, with the unstented and the stented unobstructed references: configuration -> meshes -> solves -> dataset ->
     figures. The physics: the annulus is closed at the occlusion, so the stent lumen carries the flow past it; the
     production enters the stent through the hole upstream and leaves it through the one downstream; the pelvis
     stands above the bladder. The dataset passes the CF checker."""

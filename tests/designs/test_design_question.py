@@ -73,6 +73,8 @@ def test_spread_and_volumes_of_the_spacings_at_each_stent_size(tmp_path, capsys)
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("| study | scene |") and len(out) == 2 + len(sizes)
     assert all(line.startswith("| voiding_reflux |") for line in out[2:])
+    question.write_table([path], tmp_path / "question.md")            # rule design_question's output
+    assert (tmp_path / "question.md").read_text().splitlines()[2:] == out
 
 
 def test_a_study_without_the_spacing_gives_no_row():

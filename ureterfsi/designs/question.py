@@ -5,8 +5,8 @@ grid, at every combination of its other parameters, how far apart the spacings' 
     outlet_flux_spread = max_t (max_s Q_s(t) - min_s Q_s(t)) / max_{s,t} |Q_s(t)|,
 
 with Q_s the outlet flux at spacing s, and the net outlet volume int Q_s dt of each spacing over the window (its
-`mean_outlet_flux`, from the run file, times the window), beside
-the scene that holds it (the study's obstruction and ends) and the window (docs/design-passage.md)::
+`mean_outlet_flux`, from the run file, times the window), beside the conditions that hold it (the study's obstruction
+and ends) and the window (docs/design-passage.md)::
 
     .venv/bin/python -m ureterfsi.designs.question results/designs/occlusion_holes.nc results/designs/voiding_reflux.nc
 """
@@ -83,7 +83,8 @@ def spacing_effects(ds: xr.Dataset) -> list[SpacingEffect]:
         sel = dict(zip(others, values))
         q = ds["outlet_flux"].sel(sel).transpose(SPACING, "time").values.astype(float)
         rows.append(SpacingEffect(
-            study=ds.attrs.get("study", "?"), values=sel, condition=conditions(ds, sel), window=(float(t[0]), float(t[-1])),
+            study=ds.attrs.get("study", "?"), values=sel, condition=conditions(ds, sel),
+            window=(float(t[0]), float(t[-1])),
             spacings=ds[SPACING].values.astype(float).tolist(), outlet_flux_spread=outlet_flux_spread(q),
             outlet_volumes=(ds["mean_outlet_flux"].sel(sel).transpose(SPACING).values * (t[-1] - t[0])).tolist(),
             peak_outlet_flux=float(np.nanmax(np.abs(q)))))
@@ -102,11 +103,15 @@ def table(rows: list[SpacingEffect]) -> str:
     return "\n".join(lines)
 
 
+def datasets_table(datasets) -> str:
+    """The table of the rows of every dataset (paths), each checked as a design dataset."""
+    return table([r for p in datasets for r in spacing_effects(open_netcdf(p, DESIGN_DATASET))])
+
+
 def write_table(datasets, path) -> None:
     """The table of the datasets (paths) written to `path` (atomically), under a line naming them."""
-    rows = [r for p in datasets for r in spacing_effects(open_netcdf(p, DESIGN_DATASET))]
     text = ("Does the number of side holes change the outlet flow? (ureterfsi.designs.question; "
-            f"from {', '.join(str(p) for p in datasets)})\n\n{table(rows)}\n")
+            f"from {', '.join(str(p) for p in datasets)})\n\n{datasets_table(datasets)}\n")
     with atomic_path(path) as tmp:
         Path(tmp).write_text(text)
 
@@ -115,8 +120,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("datasets", nargs="+", help="design study datasets (results/designs/<study>.nc)")
     args = ap.parse_args(argv)
-    rows = [r for path in args.datasets for r in spacing_effects(open_netcdf(path, DESIGN_DATASET))]
-    print(table(rows))
+    print(datasets_table(args.datasets))
 
 
 if __name__ == "__main__":
