@@ -289,8 +289,9 @@ def test_dry_run_lists_the_corner_jobs(tmp_path):
 
 def test_shipped_studies_are_checked():
     """Every shipped one-way study gets the check; on the command line's overlays (the 10 mm segment for the studies
-    shipped for it) the corners that are grid points reuse them; the fully coupled studies need none."""
-    reuse = {"hole_diameter_spacing": 0, "stricture": 4, "thin_gap": 2, "arrangement_offset": 4,
+    shipped for it, the study's own segment for hole_diameter_spacing) the corners that are grid points reuse them;
+    the fully coupled studies need none."""
+    reuse = {"hole_diameter_spacing": 4, "stricture": 4, "thin_gap": 2, "arrangement_offset": 4,
              "obstruction_sobol": 0, "stricture_holes": 8}
     on_50_mm = ("hole_diameter_spacing", "occlusion_holes", "stricture_holes", "voiding_reflux", "encrustation")
     for f in sorted((REPO / "config" / "designs").glob("*.yaml")):

@@ -21,7 +21,11 @@ REPO = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def cfg():
-    return load_config_files([REPO / "config/config.yaml", REPO / "config/designs/hole_diameter_spacing.yaml"])
+    """hole_diameter_spacing with its corners on the 10 mm segment (a segment of their own: their meshes and wall
+    motion beside the points')."""
+    out = load_config_files([REPO / "config/config.yaml", REPO / "config/designs/hole_diameter_spacing.yaml"])
+    out["design_studies"]["hole_diameter_spacing"]["rung_check"]["segment"] = "config/segment-10mm.yaml"
+    return out
 
 
 def test_stability_case_mesh_rung_and_trigger(cfg):
