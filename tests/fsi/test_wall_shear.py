@@ -153,17 +153,23 @@ def _hole_wall_area(a, ri, ro):
     return float(np.mean(a * (np.sqrt(ro**2 - c2) - np.sqrt(ri**2 - c2))) * 2 * math.pi)
 
 
-def test_stent_surface_regions_have_their_areas(tmp_path, repo_root):
+@pytest.mark.parametrize("hole_diameter", [5e-4, 9e-4])
+def test_stent_surface_regions_have_their_areas(tmp_path, repo_root, hole_diameter):
     """The FLUID_STENT facets of the 10 mm quarter mesh of model 3, split into outer surface, lumen and hole walls,
-    have the areas of the exact surfaces (within the faceting of the coarse mesh)."""
+    have the areas of the exact surfaces (within the faceting of the coarse mesh), and the fluid cells inside the
+    stent wall that hole_index gives each hole fill its channel's exact volume: for the paper's 0.5 mm holes and for
+    0.9 mm ones, whose walls reach past the lumen's 45 degree diagonal (2 a > sqrt(2) r_i)."""
+    from dolfinx.mesh import compute_midpoints
+
     from ureterfsi.config import load_config_files
     from ureterfsi.mesh import tags
     from ureterfsi.mesh.build import build_mesh
-    from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_pair_positions
+    from ureterfsi.mesh.geometry import StentModel, UreterGeometry, hole_channel_volume, hole_pair_positions
     from ureterfsi.mesh.io import load_mesh
-    from ureterfsi.study.stent_surface import facet_vertices, stent_wall_regions
+    from ureterfsi.study.stent_surface import facet_vertices, hole_index, stent_wall_regions
 
     cfg = load_config_files([repo_root / "config/config.yaml", repo_root / "config/segment-10mm.yaml"])
+    cfg["geometry"]["hole_diameter"] = hole_diameter
     build_mesh(cfg, "3", "coarse", "quarter", tmp_path / "m.msh", tmp_path / "m.json")
     mesh, ct, ft = load_mesh(tmp_path / "m.msh", MPI.COMM_WORLD)
     g = UreterGeometry.from_config(cfg)
@@ -182,6 +188,20 @@ def test_stent_surface_regions_have_their_areas(tmp_path, repo_root):
                                                    rel=0.01)
     for k in range(n):
         assert area(regions[f"hole_{k}"]) == pytest.approx(0.5 * _hole_wall_area(a, ri, ro), rel=0.02)
+
+    fluid = ct.find(tags.FLUID)
+    mid = compute_midpoints(mesh, mesh.topology.dim, fluid)
+    R = np.hypot(mid[:, 0], mid[:, 1])
+    channel = fluid[(R > ri) & (R < ro)]
+    near = hole_index(mid[(R > ri) & (R < ro)], holes, g.stent_offset, a)
+    assert np.all(near >= 0)                     # every fluid cell inside the stent wall is in a hole
+    x = mesh.geometry.x
+    dofs = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.links(0).size)[:, :4]
+    for k in range(n):
+        v = x[dofs[channel[near == k]]]
+        volume = np.abs(np.einsum("ij,ij->i", v[:, 1] - v[:, 0],
+                                  np.cross(v[:, 2] - v[:, 0], v[:, 3] - v[:, 0]))).sum() / 6
+        assert volume == pytest.approx(0.5 * hole_channel_volume(g), rel=0.07)
 
 
 MPI_CHECK = """

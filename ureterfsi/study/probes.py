@@ -146,6 +146,10 @@ class UreterProbes(Observer):
             Rm = np.hypot(mid[:, 0] - xs, mid[:, 1])
             chan = (Rm > g.stent_inner_radius) & (Rm < g.stent_outer_radius)
             near = hole_index(mid, self.holes, xs, g.hole_radius)
+            if np.any(chan & (near < 0)):
+                i = np.flatnonzero(chan & (near < 0))[0]
+                raise ValueError(f"hole channels: a fluid cell inside the stent wall at {mid[i].round(6).tolist()} m "
+                                 f"is in no side hole")
             self.hole_channels = ChannelFlux(pb, grad_chi, [fluid[chan & (near == k)] for k in range(len(self.holes))])
             self.surface = StentSurface(pb, cfg, g, self.holes)
             k = int(np.argmax(self.hole_z))

@@ -1,8 +1,9 @@
 """Wall shear stress on the stent and the exchange through its side holes (docs/wall-shear-and-exchange.md).
 
-The stent's fluid boundary (facet tag FLUID_STENT) is split geometrically, the mesh unchanged: the outer surface and
-the lumen (facets whose normal is radial from the stent axis, |N . e_R| > cos 45 deg, outside / inside the mid-wall
-radius) and each hole's wall (the other facets, assigned to a hole by hole_index). On each region, every step: the
+The stent's fluid boundary (facet tag FLUID_STENT) is split geometrically, the mesh unchanged: each hole's wall (the
+facets next to a hole, hole_index, whose normal is nearer the direction e_rho from the hole's axis than the radial
+direction e_R from the stent's: |N . e_rho| > |N . e_R|), the outer surface and the lumen (the other facets, radial:
+|N . e_R| > cos 45 deg, outside / inside the mid-wall radius). On each region, every step: the
 area-mean wall shear stress (ureterfsi.fsi.wall_shear.WallShear); at the end: TAWSS, OSI and the area fraction whose
 TAWSS is below config stent_surface.low_wss_threshold. Per hole, the net flux Q_k and the gross exchange E_k
 (ureterfsi.fsi.wall_shear.ChannelFlux: the mean over the channel's sections R = const of int |u.n| da, = 1/2 the
@@ -18,19 +19,31 @@ from ureterfsi.mesh import tags
 from ..fsi.wall_shear import WallShear, WallShearHistory
 
 RADIAL = np.cos(np.pi / 4)       # |N . e_R| above: a facet of the outer surface or the lumen
+HOLE_REACH = 1.5                 # hole radii from a hole's axis within which a point is next to that hole
 
 
 def hole_index(points: np.ndarray, holes, stent_offset: float, hole_radius: float) -> np.ndarray:
-    """Index into `holes` ((z, side, axis 0 = x / 1 = y) each) of the hole each reference point (n x 3) lies next
-    to: within two hole radii of its axial position, on its side of the stent axis (x = stent_offset, y = 0) and
-    nearer its axis than the other; -1 for none."""
+    """Index into `holes` ((z, side, axis 0 = x / 1 = y) each) of the hole each reference point (n x 3) lies in or
+    on: on its side of the stent axis (x = stent_offset, y = 0) and within HOLE_REACH hole radii of its axis, the
+    nearest such; -1 for none. (A hole's points lie within one radius of its axis: a hole wider than the lumen's
+    45 deg diagonal, 2 a > sqrt(2) r_i, reaches past it.)"""
+    return _nearest_hole(points, holes, stent_offset, hole_radius)[0]
+
+
+def _nearest_hole(points, holes, stent_offset, hole_radius):
+    """(hole_index, each point's offset from that hole's axis (n x 3; 0 for none))."""
     d = np.c_[points[:, 0] - stent_offset, points[:, 1]]
     out = np.full(len(points), -1, dtype=np.int64)
+    best = np.full(len(points), HOLE_REACH * hole_radius)
+    rho = np.zeros((len(points), 3))
     for k, (zk, sd, a) in enumerate(holes):
-        sel = ((np.abs(points[:, 2] - zk) < 2 * hole_radius) & (np.sign(d[:, a]) == sd)
-               & (np.abs(d[:, a]) > np.abs(d[:, 1 - a])))
-        out[sel & (out < 0)] = k
-    return out
+        across = np.zeros((len(points), 3))
+        across[:, 1 - a] = d[:, 1 - a]
+        across[:, 2] = points[:, 2] - zk
+        dist = np.linalg.norm(across, axis=1)
+        sel = (np.sign(d[:, a]) == sd) & (dist < best)
+        out[sel], best[sel], rho[sel] = k, dist[sel], across[sel]
+    return out, rho
 
 
 def facet_vertices(mesh, facets: np.ndarray) -> np.ndarray:
@@ -57,14 +70,17 @@ def stent_wall_regions(mesh, facets: np.ndarray, geom, holes) -> dict:
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     radial = np.c_[mid[:, 0] - geom.stent_offset, mid[:, 1], np.zeros(len(mid))]
     R = np.linalg.norm(radial, axis=1)
-    is_radial = np.abs(np.sum(normal * radial, axis=1)) > RADIAL * R
-    hole = hole_index(mid, holes, geom.stent_offset, geom.hole_radius)
-    if np.any(~is_radial & (hole < 0)):
-        i = np.flatnonzero(~is_radial & (hole < 0))[0]
+    n_radial = np.abs(np.sum(normal * radial, axis=1)) / R
+    hole, rho = _nearest_hole(mid, holes, geom.stent_offset, geom.hole_radius)
+    n_hole = np.abs(np.sum(normal * rho, axis=1)) / np.where(hole >= 0, np.linalg.norm(rho, axis=1), 1.0)
+    on_hole = (hole >= 0) & (n_hole > n_radial)
+    is_radial = ~on_hole & (n_radial > RADIAL)
+    if np.any(~on_hole & ~is_radial):
+        i = np.flatnonzero(~on_hole & ~is_radial)[0]
         raise ValueError(f"stent surface: a stent-fluid facet at {mid[i].round(6).tolist()} m is neither on the outer "
                          f"surface, the lumen nor a side hole's wall")
     out = {"outer": facets[is_radial & (R > geom.probe_radius)], "lumen": facets[is_radial & (R < geom.probe_radius)]}
-    return out | {f"hole_{k}": facets[~is_radial & (hole == k)] for k in range(len(holes))}
+    return out | {f"hole_{k}": facets[on_hole & (hole == k)] for k in range(len(holes))}
 
 
 class StentSurface:
