@@ -351,6 +351,23 @@ def test_passage_quantities_of_the_dataset_pass_the_cf_checker(tmp_path):
 
 # ------------------------------------------------------------------------------------------ end to end
 
+def test_fully_coupled_design_solves_reserve_the_partitioned_entry(tmp_path):
+    """A dry run of the 2 x 2 occlusion study: its 3D solves (partitioned sweeps, the study's overlay; the global
+    configuration solves by Newton on the whole system) reserve study.memory_mb.partitioned, not the whole-system
+    entry, so that two run side by side; its r-z reference reserves `axisymmetric`."""
+    from helpers.snakemake_runs import ok, planned_jobs, snakemake
+
+    cfg = mini_occlusion_config(tmp_path)
+    path = tmp_path / "cfg.yaml"
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    jobs = [j for j in planned_jobs(ok(snakemake(tmp_path, path, "-n", "-p", "design_occlusion_mini", profile=None)))
+            if j["rule"] == "design_solve"]
+    table = cfg["study"]["memory_mb"]
+    assert cfg["solver"]["fully_coupled_scheme"] == "monolithic"
+    reserved = sorted(int(j["resources"]["mem_mb"]) for j in jobs)
+    assert reserved == [table["axisymmetric"]] + 5 * [table["partitioned"]["coarse"]], reserved
+
+
 def test_two_by_two_occlusion_study_end_to_end(tmp_path):
     """tests/overlays/occlusion-holes-mini.yaml: occlusion position (4.5, 5.5 mm) x hole-pair arrangement on the 10 mm
     segment, fully coupled by the partitioned sweeps under the radial load (as the study), the pelvis filled at

@@ -74,7 +74,7 @@ def ok(run) -> str:
 def planned_jobs(text: str) -> list[dict]:
     """The jobs of a dry run (-n -p): rule, output, resources {name: value} and the shell command."""
     jobs = []
-    for block in re.split(r"^rule ", text, flags=re.M)[1:]:
+    for block in re.split(r"^(?:local)?rule ", text, flags=re.M)[1:]:
         rule, _, rest = block.partition(":\n")
         fields = dict(line.strip().split(": ", 1) for line in rest.splitlines()
                       if line.startswith("    ") and ": " in line)

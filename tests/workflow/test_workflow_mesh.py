@@ -124,11 +124,12 @@ def test_physical_memory_is_memtotal(tmp_path):
 
 def test_a_fully_coupled_solve_given_less_memory_than_it_reserves_runs_out_of_core():
     """Rule solve passes --out-of-core 1 to a fully coupled run that reserves more than the local budget holds
-    (config/reference.yaml's fine level, 26 000 MiB), so that MUMPS keeps its factors on disk; with a budget that
-    holds its reservation, and for the coarse level, 0. A resource, not a param: another budget does not re-run a
-    finished solve."""
+    (config/reference.yaml's partitioned sweeps at the fine level, 26 000 MiB), so that MUMPS keeps its factors on
+    disk; with a budget that holds its reservation, and for the coarse level, 0. A resource, not a param: another
+    budget does not re-run a finished solve."""
     targets = [f"results/runs/fully_coupled/quarter/model3_{level}.nc" for level in ("coarse", "fine")]
-    reserved = yaml.safe_load((REPO / "config/reference.yaml").read_text())["study"]["memory_mb"]["fully_coupled"]
+    assert yaml.safe_load((REPO / "config/reference.yaml").read_text())["solver"]["fully_coupled_scheme"] == "partitioned"
+    reserved = yaml.safe_load((REPO / "config/config.yaml").read_text())["study"]["memory_mb"]["partitioned"]
     for budget in (reserved["fine"] - 1, reserved["fine"]):
         run = _snakemake("-n", "-p", "--forceall", "--cores", "2", "--resources", f"mem_mb={budget}",
                          "--configfile", "config/config.yaml", "config/reference.yaml", "--", *targets)

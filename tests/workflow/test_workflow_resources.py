@@ -11,7 +11,9 @@ REPO = Path(__file__).resolve().parents[2]
 CFG = {"study": {"memory_headroom_mb": 2000,
                  "memory_mb": {"axisymmetric": 1000, "symmetry_factor": {"quarter": 1, "half": 2, "full": 4},
                                "one_way": {"coarse": 5500, "medium": 7000},
-                               "fully_coupled": {"coarse": 4000, "medium": 17000}}},
+                               "fully_coupled": {"coarse": 4000, "medium": 17000},
+                               "partitioned": {"coarse": 3000, "medium": 6000}}},
+       "solver": {"fully_coupled_scheme": "monolithic"},
        "mesh": {"levels": {"coarse": {"size_factor": 2.0}, "medium": {"size_factor": 1.4},
                            "fine": {"size_factor": 1.0}}}}
 
@@ -22,6 +24,36 @@ def test_memory_reservation_by_rung_symmetry_and_level():
     assert r.solve_mem_mb(CFG, "fully_coupled", "half", "coarse") == 8000
     assert r.solve_mem_mb(CFG, "one_way", "quarter", "fine") == 7000          # no entry: the largest
     assert r.local_memory_budget(CFG, 24000) == 22000
+
+
+def test_a_fully_coupled_solve_reserves_its_schemes_entry():
+    """Newton on the whole system reserves `fully_coupled`, the partitioned sweeps `partitioned`: the solve's own
+    scheme where given (a design study's), else the configuration's; the one-way rung has no scheme."""
+    assert r.solve_mem_mb(CFG, "fully_coupled", "quarter", "medium", "partitioned") == 6000
+    assert r.solve_mem_mb(CFG, "fully_coupled", "quarter", "medium", "monolithic") == 17000
+    partitioned = CFG | {"solver": {"fully_coupled_scheme": "partitioned"}}
+    assert r.solve_mem_mb(partitioned, "fully_coupled", "half", "coarse") == 6000
+    assert r.solve_mem_mb(partitioned, "fully_coupled", "half", "coarse", "monolithic") == 8000
+    assert r.solve_mem_mb(partitioned, "one_way", "quarter", "coarse") == 5500
+    assert r.out_of_core(CFG, "fully_coupled", "quarter", "medium", 16000, "partitioned") == 0
+    assert r.node_refusal(CFG, "one_way", "quarter", "medium", 6500, "partitioned") != ""
+
+
+def test_two_coarse_fully_coupled_design_solves_fit_side_by_side():
+    """The shipped configuration: a design study's fully coupled points (partitioned sweeps, the study's overlay)
+    reserve the `partitioned` entry, so that two coarse ones run together within a 24 GiB machine's budget, where
+    Newton's whole-system entry would run them one at a time."""
+    from ureterfsi.config import load_config_files
+    from ureterfsi.designs import jobs
+    from ureterfsi.designs.expand import studies
+
+    cfg = load_config_files([REPO / "config" / "config.yaml", REPO / "config" / "designs" / "occlusion_holes.yaml"])
+    st = studies(cfg)["occlusion_holes"]
+    solve = jobs.point_solve(st, st.points[0].id)
+    assert jobs.scheme(solve) == "partitioned" != cfg["solver"]["fully_coupled_scheme"]
+    budget = r.local_memory_budget(cfg, 24 * 1024)
+    assert 2 * r.solve_mem_mb(cfg, *jobs.rung(solve), jobs.scheme(solve)) <= budget
+    assert 2 * r.solve_mem_mb(cfg, *jobs.rung(solve)) > budget
 
 
 def test_out_of_core_only_for_a_fully_coupled_solve_over_the_budget():

@@ -116,6 +116,11 @@ def rung(solve: dict) -> tuple[str, str, str]:
     return solve["fidelity"], solve["symmetry"], solve["level"]
 
 
+def scheme(solve: dict) -> str:
+    """The solve's solver.fully_coupled_scheme (its memory reservation's entry, workflow.resources.memory_entry)."""
+    return json.loads(solve["sections"])["solver"]["fully_coupled_scheme"]
+
+
 def escalates(st: Study) -> bool:
     """Whether the study's dataset waits for its rung check to know its runs (rung_check.on_failure: escalate)."""
     return bool(st.check) and st.check.on_failure == "escalate"

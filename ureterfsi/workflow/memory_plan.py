@@ -19,7 +19,7 @@ import yaml
 
 from ..config import ConfigError, load_config_files
 from ..data.checked import BadFile, Contract, open_netcdf
-from .resources import solve_mem_mb
+from .resources import memory_entry, solve_mem_mb
 
 RUN_FILE = Contract("run file", attrs=("model", "mesh_level", "symmetry", "fidelity"))
 STEP_MIB = 500          # suggested reservations are rounded up to this
@@ -64,7 +64,7 @@ def measured(cfg: dict, path) -> Measured:
 def suggested(cfg: dict, runs: list[Measured], margin: float) -> dict:
     """study.memory_mb entries covering every measured run with `margin` (e.g. 1.25 = 25 % above the peak),
     rounded up to STEP_MIB: a 3D run's peak divided by its symmetry's factor gives the quarter-mesh entry of its
-    fidelity and level (the table's convention); an r-z run gives `axisymmetric`. Only entries that measured runs
+    fidelity (by `cfg`'s scheme, resources.memory_entry) and level (the table's convention); an r-z run gives `axisymmetric`. Only entries that measured runs
     inform; the largest of the current entry's runs wins."""
     factors = cfg["study"]["memory_mb"]["symmetry_factor"]
     out: dict = {}
@@ -74,7 +74,7 @@ def suggested(cfg: dict, runs: list[Measured], margin: float) -> dict:
             out["axisymmetric"] = max(out.get("axisymmetric", 0), need)
             continue
         quarter = STEP_MIB * math.ceil(r.peak_mib * margin / factors[r.symmetry] / STEP_MIB)
-        table = out.setdefault(r.fidelity, {})
+        table = out.setdefault(memory_entry(r.fidelity, cfg["solver"]["fully_coupled_scheme"]), {})
         table[r.level] = max(table.get(r.level, 0), quarter)
     return out
 

@@ -36,30 +36,37 @@ def wall_priority(cfg: dict) -> int:
     return 1 + max(solve_priority(cfg, m, level) for m in cfg["models"] for level in cfg["mesh"]["levels"])
 
 
-def solve_mem_mb(cfg: dict, fidelity: str, symmetry: str, level: str) -> int:
+def memory_entry(fidelity: str, scheme: str) -> str:
+    """The study.memory_mb entry of a 3D solve: its fidelity, but `partitioned` for the fully coupled rung solved by
+    partitioned sweeps (solver.fully_coupled_scheme), which holds ~1/4 of the memory of Newton on the whole system
+    (docs/performance.md)."""
+    return "partitioned" if fidelity == "fully_coupled" and scheme == "partitioned" else fidelity
+
+
+def solve_mem_mb(cfg: dict, fidelity: str, symmetry: str, level: str, scheme: str | None = None) -> int:
     """MiB a solve reserves (resource mem_mb) from study.memory_mb: r-z runs reserve `axisymmetric`, 3D runs
-    their fidelity's entry for the level (a level without one: that fidelity's largest entry; the entries are
-    for quarter meshes) times the symmetry's factor."""
+    their entry (memory_entry; `scheme` the solve's solver.fully_coupled_scheme, None: cfg's) for the level (a level
+    without one: that entry's largest; the entries are for quarter meshes) times the symmetry's factor."""
     table = cfg["study"]["memory_mb"]
     if symmetry == "axisymmetric":
         return int(table["axisymmetric"])
-    per_level = table[fidelity]
+    per_level = table[memory_entry(fidelity, scheme or cfg["solver"]["fully_coupled_scheme"])]
     return int(per_level.get(level, max(per_level.values())) * table["symmetry_factor"][symmetry])
 
 
-def out_of_core(cfg: dict, fidelity: str, symmetry: str, level: str, budget_mb) -> int:
+def out_of_core(cfg: dict, fidelity: str, symmetry: str, level: str, budget_mb, scheme: str | None = None) -> int:
     """1 for a fully coupled solve that reserves more memory than the local budget (None: no budget, a
     cluster run) holds: MUMPS then keeps its factors on disk, the same solution in a fraction of the memory
     (docs/performance.md); else 0."""
-    reserved = solve_mem_mb(cfg, fidelity, symmetry, level)
+    reserved = solve_mem_mb(cfg, fidelity, symmetry, level, scheme)
     return int(fidelity == "fully_coupled" and budget_mb is not None and reserved > int(budget_mb))
 
 
-def node_refusal(cfg: dict, fidelity: str, symmetry: str, level: str, node_mb) -> str:
+def node_refusal(cfg: dict, fidelity: str, symmetry: str, level: str, node_mb, scheme: str | None = None) -> str:
     """Why a solve cannot run on a node of `node_mb` MiB (cluster.mem_mb_per_node; None: unknown), '' if it can: it
     reserves more than the node has and cannot keep its factors on disk (out_of_core against the node)."""
-    need = solve_mem_mb(cfg, fidelity, symmetry, level)
-    if node_mb is None or need <= int(node_mb) or out_of_core(cfg, fidelity, symmetry, level, node_mb):
+    need = solve_mem_mb(cfg, fidelity, symmetry, level, scheme)
+    if node_mb is None or need <= int(node_mb) or out_of_core(cfg, fidelity, symmetry, level, node_mb, scheme):
         return ""
     return f"needs {need} MiB (study.memory_mb), more than a node has (cluster.mem_mb_per_node: {int(node_mb)})"
 

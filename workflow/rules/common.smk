@@ -131,9 +131,9 @@ def solve_priority(w):
     return decide.solve_priority(config, w.model, w.level)
 
 
-def solve_mem_mb(fidelity, symmetry, level):
+def solve_mem_mb(fidelity, symmetry, level, scheme=None):
     """MiB a solve reserves (resource mem_mb; ureterfsi.workflow.resources.solve_mem_mb)."""
-    return decide.solve_mem_mb(config, fidelity, symmetry, level)
+    return decide.solve_mem_mb(config, fidelity, symmetry, level, scheme)
 
 
 def memory_budget():
@@ -146,15 +146,16 @@ def memory_budget():
     return getattr(budget, "raw", budget)
 
 
-# The resources and command of a solve rule, from rung(w): the (fidelity, symmetry, level) of its solve.
+# The resources and command of a solve rule, from rung(w): the (fidelity, symmetry, level) of its solve, and
+# scheme(w): its solver.fully_coupled_scheme where it is not the configuration's (a design study's), else None.
 
 
-def out_of_core(rung):
+def out_of_core(rung, scheme=lambda w: None):
     """Resource mumps_out_of_core: decide.out_of_core against memory_budget (a local run caps its reservation at
     the budget, a cluster run at the node's memory). A resource, not a param: it does not change the solution,
     so a changed budget must not re-run a finished solve (params are a rerun trigger).
     """
-    return lambda w: decide.out_of_core(config, *rung(w), memory_budget())
+    return lambda w: decide.out_of_core(config, *rung(w), memory_budget(), scheme(w))
 
 
 def solve_mpi(rung):
@@ -162,18 +163,18 @@ def solve_mpi(rung):
     return lambda w: decide.mpi_resource(*rung(w)[:2])
 
 
-def solve_mem_mb_of(rung, run):
+def solve_mem_mb_of(rung, run, scheme=lambda w: None):
     """Resource mem_mb (solve_mem_mb). On a cluster, a solve that needs more than a node has
     (cluster.mem_mb_per_node) and cannot keep its factors on disk is refused before submission, naming run(w).
     """
 
     def mem_mb(w):
         why = decide.node_refusal(
-            config, *rung(w), config["cluster"]["mem_mb_per_node"]
+            config, *rung(w), config["cluster"]["mem_mb_per_node"], scheme(w)
         )
         if why:
             raise WorkflowError(f"{run(w)} {why}")
-        return solve_mem_mb(*rung(w))
+        return solve_mem_mb(*rung(w), scheme(w))
 
     return mem_mb
 

@@ -121,6 +121,21 @@ def corner_rung(w):
     return design_jobs.rung(corner_solve(w))
 
 
+def point_scheme(w):
+    """solver.fully_coupled_scheme of a design point's solve (its memory reservation)."""
+    return design_jobs.scheme(point_solve(w))
+
+
+def escalated_scheme(w):
+    """solver.fully_coupled_scheme of an escalated design point's solve."""
+    return design_jobs.scheme(escalated_solve(w))
+
+
+def corner_scheme(w):
+    """solver.fully_coupled_scheme of a rung-check corner's solve."""
+    return design_jobs.scheme(corner_solve(w))
+
+
 def design_job(solve, name, input, output):
     """The solve (launch.SolveJob) given solve, its checkpoint named name."""
     files = {"mesh": input.mesh, "out": output[0], "wall": input.get("wall")}

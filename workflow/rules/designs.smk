@@ -69,10 +69,12 @@ if DESIGNS:
             tasks=1,
             mpi=solve_mpi(point_rung),
             mem_mb=solve_mem_mb_of(
-                point_rung, lambda w: paths.design_run(w.design_study, w.point)
+                point_rung,
+                lambda w: paths.design_run(w.design_study, w.point),
+                point_scheme,
             ),
             runtime=24 * 60,
-            mumps_out_of_core=out_of_core(point_rung),
+            mumps_out_of_core=out_of_core(point_rung, point_scheme),
         params:
             # rerun triggers (the command is not one: a function of resources)
             study=lambda w: design_jobs.solve_trigger(point_solve(w)),
@@ -97,9 +99,10 @@ if DESIGNS:
             mem_mb=solve_mem_mb_of(
                 escalated_rung,
                 lambda w: paths.escalated_run(w.design_study, w.point),
+                escalated_scheme,
             ),
             runtime=24 * 60,
-            mumps_out_of_core=out_of_core(escalated_rung),
+            mumps_out_of_core=out_of_core(escalated_rung, escalated_scheme),
         params:
             # rerun triggers (the command is not one: a function of resources)
             study=lambda w: design_jobs.solve_trigger(escalated_solve(w)),
@@ -124,9 +127,10 @@ if DESIGNS:
             mem_mb=solve_mem_mb_of(
                 corner_rung,
                 lambda w: paths.corner_run(w.design_study, w.corner, w.corner_rung),
+                corner_scheme,
             ),
             runtime=24 * 60,
-            mumps_out_of_core=out_of_core(corner_rung),
+            mumps_out_of_core=out_of_core(corner_rung, corner_scheme),
         params:
             # rerun triggers (the command is not one: a function of resources)
             study=lambda w: design_jobs.solve_trigger(corner_solve(w)),
