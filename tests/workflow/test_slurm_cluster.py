@@ -61,7 +61,7 @@ def test_site_overlay_caps_every_job_and_refuses_what_cannot_fit(tmp_path):
     small.write_text("cluster: {mem_mb_per_node: 3000}\n")
     run = slurm_snakemake(work, cfg_path, ONE_WAY, "-n", timeout=300, overlays=(SITE, small))
     assert run.returncode != 0
-    assert (f"{ONE_WAY} needs 5500 MiB (study.memory_mb), more than a node has (cluster.mem_mb_per_node: 3000)"
+    assert (f"{ONE_WAY} needs 6000 MiB (study.memory_mb), more than a node has (cluster.mem_mb_per_node: 3000)"
             in run.stdout + run.stderr), run.stdout[-3000:] + run.stderr[-3000:]
 
 
