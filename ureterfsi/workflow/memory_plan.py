@@ -64,8 +64,8 @@ def measured(cfg: dict, path) -> Measured:
 def suggested(cfg: dict, runs: list[Measured], margin: float) -> dict:
     """study.memory_mb entries covering every measured run with `margin` (e.g. 1.25 = 25 % above the peak),
     rounded up to STEP_MIB: a 3D run's peak divided by its symmetry's factor gives the quarter-mesh entry of its
-    fidelity (by `cfg`'s scheme, resources.memory_entry) and level (the table's convention); an r-z run gives `axisymmetric`. Only entries that measured runs
-    inform; the largest of the current entry's runs wins."""
+    fidelity (by `cfg`'s scheme, resources.memory_entry) and level (the table's convention); an r-z run gives
+    `axisymmetric`. Only entries that measured runs inform; the largest of the current entry's runs wins."""
     factors = cfg["study"]["memory_mb"]["symmetry_factor"]
     out: dict = {}
     for r in runs:
