@@ -128,7 +128,8 @@ def test_a_fully_coupled_solve_given_less_memory_than_it_reserves_runs_out_of_co
     disk; with a budget that holds its reservation, and for the coarse level, 0. A resource, not a param: another
     budget does not re-run a finished solve."""
     targets = [f"results/runs/fully_coupled/quarter/model3_{level}.nc" for level in ("coarse", "fine")]
-    assert yaml.safe_load((REPO / "config/reference.yaml").read_text())["solver"]["fully_coupled_scheme"] == "partitioned"
+    reference = yaml.safe_load((REPO / "config/reference.yaml").read_text())
+    assert reference["solver"]["fully_coupled_scheme"] == "partitioned"
     reserved = yaml.safe_load((REPO / "config/config.yaml").read_text())["study"]["memory_mb"]["partitioned"]
     for budget in (reserved["fine"] - 1, reserved["fine"]):
         run = _snakemake("-n", "-p", "--forceall", "--cores", "2", "--resources", f"mem_mb={budget}",
