@@ -5,6 +5,7 @@ least-squares fit)."""
 from __future__ import annotations
 
 import itertools
+import textwrap
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -83,7 +84,9 @@ def map_figure(ds: xr.Dataset):
                 ax.set_title(", ".join(f"{_label(o)} = {v:g} {PARAMETERS[o].units}" for o, v in zip(others, combo)),
                              fontsize=8)
     at = ", ".join(f"{_label(d)} = {float(v):g} {PARAMETERS[d].units}" for d, v in fixed.items())
-    fig.suptitle(ds.attrs.get("title", "") + (f"\n{at}" if at else ""), fontsize=9)
+    title = ds.attrs.get("title", "") + (f"\n{at}" if at else "")
+    width = int(13 * fig.get_figwidth())            # characters of 9 pt text across the figure
+    fig.suptitle("\n".join(textwrap.fill(line, width) for line in title.split("\n")), fontsize=9)
     return fig
 
 
